@@ -1,0 +1,472 @@
+/*
+ * stickslip.h: the public interface of libstickslip.
+ *
+ * libstickslip computes the motion of the two-mass oscillator driven by a belt
+ * through Coulomb friction of M. Pascal, "New events in stick slip oscillators
+ * behaviour", J. Appl. Math. Mech. 75(3), 2011.  Equation numbers such as
+ * (2.7) or (5.1) refer to that paper.
+ *
+ * Whatever this header does not declare is not part of the library's API.
+ *
+ * The model, in dimensionless time t (equations (1.1), (1.2)):
+ *
+ *     x1'' + x1 - chi x2 = 0
+ *     x2'' + chi eta (x2 - x1) = eta u
+ *
+ * with belt speed V and friction u: +us while x2' < V ("slip"), -us while
+ * x2' > V ("overshoot"), and u = chi (x2 - x1) while x2' = V ("stick"), which
+ * holds as long as chi |x2 - x1| <= ur.  0 < chi < 1, eta > 0, 0 < us < ur,
+ * V > 0.
+ *
+ * A state is always the array x[4] = {x1, x2, x1', x2'} in the coordinates of
+ * (1.1).  The paper's shifted coordinates z = x - d0 with
+ * d0 = (us/(1-chi), us/(chi(1-chi))) are used by the transition matrices and
+ * by the orbit functions, and are named z where they appear.
+ *
+ * Errors.  Every function that can fail returns an int status from the table
+ * SS_STATUS_MAP: zero is success, a positive value is information the caller
+ * must read (for example SS_GRAZING), a negative value is a failure.  Details
+ * go to an optional caller-owned ss_diag; pass NULL when they are not wanted.
+ * The library never prints, exits or aborts; it turns GSL's abort-on-error
+ * handler off for the calls it makes (see ss_gsl_quiet()).
+ *
+ * Thread safety.  Every function is reentrant: it touches only its arguments.
+ * Objects may be shared read-only between threads.
+ */
+#ifndef STICKSLIP_H
+#define STICKSLIP_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if defined(STICKSLIP_BUILDING) && defined(__GNUC__)
+#define SS_API __attribute__((visibility("default")))
+#else
+#define SS_API
+#endif
+
+#define SS_VERSION "0.1.0"
+
+/* ------------------------------------------------------------------------ */
+/* Status codes                                                              */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * The one table of status codes: name, value, message.  Positive values are
+ * information, negative values are failures.
+ */
+#define SS_STATUS_MAP(X)                                                      \
+  X(OK, 0, "success")                                                         \
+  X(GRAZING, 1, "trajectory touches a switching surface tangentially")       \
+  X(HORIZON, 2, "no event before the horizon")                               \
+  X(NEVER, 3, "the switching function can never reach zero")                 \
+  X(EDOMAIN, -1, "parameter outside its domain")                             \
+  X(EINVAL, -2, "invalid argument")                                          \
+  X(ENOCONV, -3, "iteration did not converge")                               \
+  X(ELIMIT_EVENTS, -4, "event limit reached before the end of the run")      \
+  X(ELIMIT_SAMPLES, -5, "sample limit exceeded")                             \
+  X(ELIMIT_TIME, -6, "compute time budget exhausted")                        \
+  X(ENOMEM, -7, "out of memory")                                             \
+  X(ESINGULAR, -8, "singular linear system")                                 \
+  X(EBUG, -9, "internal invariant violated")
+
+enum {
+#define SS_STATUS_ENUM(name, value, msg) SS_##name = (value),
+  SS_STATUS_MAP(SS_STATUS_ENUM)
+#undef SS_STATUS_ENUM
+};
+
+/** The message of a status code ("unknown status" for anything else). */
+SS_API const char *ss_strerror(int status);
+/** The name of a status code without its prefix, e.g. "GRAZING". */
+SS_API const char *ss_status_name(int status);
+
+/**
+ * Details of a failure.  The first error recorded wins; later ones are
+ * ignored, so the most specific cause survives.
+ */
+typedef struct ss_diag {
+  int status;      /**< the status the failing call returned */
+  char where[32];  /**< parameter or phase concerned, e.g. "chi", "stick" */
+  double value;    /**< the offending value, when there is one */
+  char text[192];  /**< a sentence a person can act on */
+} ss_diag;
+
+/** Reset @a d to "no error".  NULL is allowed. */
+SS_API void ss_diag_clear(ss_diag *d);
+
+/** Turn GSL's default abort-on-error handler off (idempotent, process-wide). */
+SS_API void ss_gsl_quiet(void);
+
+/* ------------------------------------------------------------------------ */
+/* Parameters                                                                */
+/* ------------------------------------------------------------------------ */
+
+/** The dimensionless parameters of (1.1)-(1.2). */
+typedef struct ss_params {
+  double chi; /**< k2/(k1+k2), 0 < chi < 1 */
+  double eta; /**< m1/m2, eta > 0 */
+  double us;  /**< dynamic friction level Fs/(k1+k2), 0 < us < ur */
+  double ur;  /**< static friction level Fr/(k1+k2) */
+  double V;   /**< belt speed v0/omega, V > 0 */
+} ss_params;
+
+/** Parameters in physical units (any consistent unit system). */
+typedef struct ss_physical {
+  double m1, m2; /**< masses, > 0 */
+  double k1, k2; /**< spring stiffnesses, > 0 */
+  double Fs, Fr; /**< dynamic and static friction forces, 0 < Fs < Fr */
+  double v0;     /**< belt speed, > 0 */
+} ss_physical;
+
+/**
+ * Check @a p: every value finite, 0 < chi < 1, eta > 0, 0 < us < ur, V > 0.
+ * @return SS_OK or SS_EDOMAIN, with the parameter named in @a d->where.
+ */
+SS_API int ss_params_check(const ss_params *p, ss_diag *d);
+
+/**
+ * Convert physical parameters to dimensionless ones:
+ * omega = sqrt((k1+k2)/m1), chi = k2/(k1+k2), eta = m1/m2,
+ * us = Fs/(k1+k2), ur = Fr/(k1+k2), V = v0/omega.
+ * Dimensionless time is t = omega * (physical time); displacements keep their
+ * unit; a velocity v in the model is v*omega in physical units.
+ * @param[out] p      the dimensionless parameters, checked
+ * @param[out] omega  the time scale (1/s when the inputs are SI), may be NULL
+ * @return SS_OK or SS_EDOMAIN (naming the physical field).
+ */
+SS_API int ss_params_from_physical(const ss_physical *ph, ss_params *p,
+                                   double *omega, ss_diag *d);
+
+/**
+ * Convert a dimensionless state x (positions, velocities) and time t back to
+ * physical units with the time scale @a omega: t/omega, x, x'*omega.
+ * Either of @a t_out and @a x_out may be NULL.
+ */
+SS_API void ss_to_physical(double omega, double t, const double x[4],
+                           double *t_out, double x_out[4]);
+
+/** The inverse of ss_to_physical(). */
+SS_API void ss_from_physical(double omega, double t_phys,
+                             const double x_phys[4], double *t_out,
+                             double x_out[4]);
+
+/* ------------------------------------------------------------------------ */
+/* Model: modal decomposition and closed-form flows                          */
+/* ------------------------------------------------------------------------ */
+
+/** The three modes of motion of the mass on the belt. */
+typedef enum ss_mode {
+  SS_MODE_SLIP = 0,      /**< x2' < V, u = +us */
+  SS_MODE_OVERSHOOT = 1, /**< x2' > V, u = -us */
+  SS_MODE_STICK = 2      /**< x2' = V, u = chi (x2 - x1), |u| <= ur */
+} ss_mode;
+
+/** "slip", "overshoot", "stick"; NULL for anything else. */
+SS_API const char *ss_mode_name(ss_mode m);
+
+/**
+ * The parameters with everything derived from them once: the eigenvalues
+ * lam of K = [[1, -chi], [-chi eta, chi eta]] (the squared modal
+ * frequencies, lam[0] < lam[1]), the mode shapes phi (columns) and their
+ * inverse, and d0.  Caller-allocated; fill it with ss_model_init().
+ */
+typedef struct ss_model {
+  ss_params p;
+  double lam[2];       /**< eigenvalues of K, ascending */
+  double w[2];         /**< modal frequencies sqrt(lam) */
+  double phi[2][2];    /**< z = phi q: column k is the k-th mode shape */
+  double phiinv[2][2]; /**< q = phiinv z */
+  double d0[2];        /**< static deflection under +us: K d0 = (0, eta us) */
+} ss_model;
+
+/**
+ * Check @a p and derive the modal data.
+ * @return SS_OK or SS_EDOMAIN.  Thread-safe; allocates nothing.
+ */
+SS_API int ss_model_init(ss_model *m, const ss_params *p, ss_diag *d);
+
+/**
+ * The friction force needed to hold the stick, chi (x2 - x1), of a state.
+ */
+SS_API double ss_stick_force(const ss_model *m, const double x[4]);
+
+/**
+ * The mode a state starts in.  The rule, which also decides every transition
+ * at the end of a slip or overshoot phase:
+ *
+ * - x2' < V: slip; x2' > V: overshoot (exact comparisons);
+ * - x2' = V and chi |x2 - x1| < ur: stick;
+ * - x2' = V and chi (x2 - x1) > ur: slip; < -ur: overshoot;
+ * - x2' = V and chi |x2 - x1| = ur exactly (the threshold): the static
+ *   friction can still hold (the stick set is closed), so the state sticks if
+ *   the stick force moves back inside (its first non-zero derivative under
+ *   the stick motion points inward, or all vanish) and slips to the side
+ *   of the threshold otherwise.  A stick is therefore never of zero length.
+ */
+SS_API ss_mode ss_mode_of_state(const ss_model *m, const double x[4]);
+
+/**
+ * The state after time @a t >= 0 of the motion in mode @a mode from @a x0,
+ * by the closed form (no integration).  In stick, x0[3] is taken to be V.
+ * @a x0 and @a x may alias.
+ */
+SS_API void ss_flow(const ss_model *m, ss_mode mode, double t,
+                    const double x0[4], double x[4]);
+
+/**
+ * The affine transition of mode @a mode over time @a t in the coordinates
+ * z = x - (d0, 0):  Z(t) = A(t) Z0 + c(t), row-major 4x4 A.
+ *
+ *   slip:      A = H(t),      c = 0          (2.1)
+ *   overshoot: A = H(t),      c = 2 L(t) d0  (2.4)
+ *   stick:     A = Gamma(t),  c = 0          (2.6), valid when z2'(0) = V
+ *
+ * @param[out] A, c    the map; either may be NULL
+ * @param[out] dA, dc  their time derivatives; either may be NULL
+ */
+SS_API void ss_transition(const ss_model *m, ss_mode mode, double t,
+                          double A[16], double c[4], double dA[16],
+                          double dc[4]);
+
+/** z = x - (d0, 0).  @a x and @a z may alias. */
+SS_API void ss_x_to_z(const ss_model *m, const double x[4], double z[4]);
+/** x = z + (d0, 0).  @a x and @a z may alias. */
+SS_API void ss_z_to_x(const ss_model *m, const double z[4], double x[4]);
+
+/* ------------------------------------------------------------------------ */
+/* Certified event location                                                  */
+/* ------------------------------------------------------------------------ */
+
+#define SS_TRIG_MAX 3
+
+/**
+ * A switching function of the form
+ *
+ *     g(t) = c0 + c1 t + sum_{k<n} (a[k] cos(w[k] t) + b[k] sin(w[k] t))
+ *
+ * with n <= SS_TRIG_MAX and w[k] > 0.  Every switching function of the model
+ * has this form: x2' - V in slip and overshoot (two modal terms), and
+ * chi (x2 - x1) -+ ur in stick (a line plus one term).
+ */
+typedef struct ss_trig {
+  double c0, c1;
+  int n;
+  double a[SS_TRIG_MAX], b[SS_TRIG_MAX], w[SS_TRIG_MAX];
+} ss_trig;
+
+/** g(t) and its first @a order derivatives into out[0..order], order <= 3. */
+SS_API void ss_trig_eval(const ss_trig *g, double t, int order, double *out);
+
+/**
+ * The first zero of @a g after @a t0, for a g that is negative just after t0.
+ *
+ * Method.  From a point a with g(a) < 0, the bound
+ *   g(a+h) <= g(a) + g'(a) h + g''(a) h^2/2 + M3 h^3/6,
+ *   M3 = sum_k sqrt(a_k^2 + b_k^2) w_k^3,
+ * (and its second-order counterpart with M2) gives the largest step over
+ * which g provably stays negative, so no root is stepped over, however close
+ * two roots are.  The steps converge quadratically to a simple root, which is
+ * then polished by a safeguarded Newton iteration.
+ *
+ * Tolerance.  |g| <= tol with tol = 16 DBL_EPSILON * scale, scale =
+ * |c0| + |c1 t| + sum_k sqrt(a_k^2 + b_k^2), counts as zero: below it the
+ * sign of a computed g is not reliable.  A zero at which g does not rise
+ * above tol (a local maximum within tol of zero) is a tangency: the function
+ * returns SS_GRAZING with @a *t at the maximum.  A maximum of g below -tol is
+ * a near miss and is passed over.
+ *
+ * Start.  If g(t0) is within tol of zero, the direction in which g leaves
+ * t0 decides: if it leaves downward (first non-negligible derivative
+ * negative) the search starts just after t0; if it rises, t0 itself is the
+ * root (SS_OK, *t = t0).
+ *
+ * @param tmax     search horizon, > t0
+ * @param[out] t   the root or tangency; tmax on SS_HORIZON
+ * @return SS_OK (crossing), SS_GRAZING (tangency), SS_HORIZON (g < 0 on
+ *         (t0, tmax]), SS_NEVER (c1 = 0 and c0 + sum |terms| < -tol: g can
+ *         never reach zero), SS_EINVAL (g positive at t0, bad arguments).
+ * Thread-safe; allocates nothing.
+ */
+SS_API int ss_trig_first_root(const ss_trig *g, double t0, double tmax,
+                              double *t);
+
+/* ------------------------------------------------------------------------ */
+/* Event-driven simulation                                                   */
+/* ------------------------------------------------------------------------ */
+
+/** What kind of event. */
+typedef enum ss_event_kind {
+  SS_EVENT_TRANSITION = 0, /**< the mode changes */
+  SS_EVENT_GRAZING = 1     /**< a tangency with a switching surface */
+} ss_event_kind;
+
+/** One event: the switching time, the modes before and after, the state. */
+typedef struct ss_event {
+  double t;            /**< absolute time of the event */
+  ss_mode from, to;    /**< from == to for a grazing that changes nothing */
+  ss_event_kind kind;
+  double x[4];         /**< state at the event */
+} ss_event;
+
+/**
+ * An event-driven simulation in progress.  The state is re-anchored at every
+ * event, so within a phase it is the closed form from the last event: a long
+ * run keeps machine precision.  Absolute time is kept as an unevaluated sum
+ * t_hi + t_lo, so that event times stay accurate after 10^6 events.
+ * Caller-allocated; fill with ss_sim_init(); no _free is needed.
+ */
+typedef struct ss_sim {
+  const ss_model *m;
+  ss_mode mode;        /**< current mode */
+  double t_hi, t_lo;   /**< absolute time of the anchor */
+  double x[4];         /**< state at the anchor */
+  int perpetual;       /**< the current slip can never end */
+  double t_next;       /**< local time of the next event (valid if have_next) */
+  int next_status;     /**< SS_OK, SS_GRAZING or SS_HORIZON for t_next */
+  int next_sign;       /**< stick: +1 next event at +ur, -1 at -ur */
+  int have_next;
+  double next_horizon; /**< local horizon the search for t_next used */
+} ss_sim;
+
+/**
+ * Start a simulation at absolute time @a t0 from @a x0; the mode follows
+ * ss_mode_of_state().  @return SS_OK or SS_EINVAL (non-finite input).
+ */
+SS_API int ss_sim_init(ss_sim *s, const ss_model *m, double t0,
+                       const double x0[4], ss_diag *d);
+
+/**
+ * Start in a given @a mode (for example stick at the threshold).  The state
+ * must be consistent with it: x2' = V for stick (forced exactly), x2' <= V
+ * for slip, x2' >= V for overshoot.  @return SS_OK or SS_EINVAL.
+ */
+SS_API int ss_sim_init_mode(ss_sim *s, const ss_model *m, double t0,
+                            const double x0[4], ss_mode mode, ss_diag *d);
+
+/** Current absolute time of the anchor (the last event or the start). */
+SS_API double ss_sim_time(const ss_sim *s);
+
+/**
+ * Advance to the next event if it comes no later than absolute time
+ * @a t_stop; fill @a ev and re-anchor there.
+ * @return SS_OK (an event, in @a ev; ev->kind says whether it is a grazing),
+ *         SS_HORIZON (no event up to t_stop: nothing changes),
+ *         or a failure.
+ */
+SS_API int ss_sim_next_event(ss_sim *s, double t_stop, ss_event *ev);
+
+/**
+ * The state at absolute time @a t, which must lie between the anchor and
+ * the next event: anchor time + local time, from the closed form.
+ */
+SS_API void ss_sim_state_at(const ss_sim *s, double t, double x[4]);
+
+/** Move the anchor forward to absolute time @a t (no event in between). */
+SS_API void ss_sim_advance(ss_sim *s, double t);
+
+/** What a simulation request asks for; zero-initialise, then set. */
+typedef struct ss_sim_opts {
+  double t0;               /**< start time (usually 0) */
+  double t_end;            /**< stop at this absolute time, > t0 */
+  size_t stop_after;       /**< if > 0: stop at the stop_after-th event */
+  int record_events;       /**< store the events in the result */
+  size_t n_samples;        /**< evenly spaced samples over [sample_from, sample_to] */
+  double sample_from, sample_to;
+  const double *sample_times; /**< or explicit times, ascending (n_sample_times) */
+  size_t n_sample_times;
+  size_t max_events;       /**< limit: more events than this is SS_ELIMIT_EVENTS (0: none) */
+  size_t max_samples;      /**< limit on samples (0: none) */
+  double max_seconds;      /**< CPU/wall budget in seconds (0: none) */
+} ss_sim_opts;
+
+/** The result of ss_simulate(); release with ss_sim_result_free(). */
+typedef struct ss_sim_result {
+  double t;            /**< final time */
+  ss_mode mode;        /**< final mode */
+  double x[4];         /**< final state */
+  size_t n_events;     /**< events that happened */
+  size_t n_grazing;    /**< of which tangencies */
+  ss_event *events;    /**< the events if record_events, else NULL */
+  size_t n_samples;
+  double *st;          /**< sample times */
+  double *sx;          /**< samples, 4 per time: x1, x2, x1', x2' */
+  unsigned char *smode;/**< mode at each sample */
+  int perpetual;       /**< ended in a slip that can never end */
+} ss_sim_result;
+
+/**
+ * Simulate from @a x0 (mode by ss_mode_of_state()) under @a o.
+ * Samples cost only when asked for; with no samples and record_events = 0,
+ * nothing is allocated.
+ * @return SS_OK; or SS_ELIMIT_EVENTS, SS_ELIMIT_SAMPLES, SS_ELIMIT_TIME when a
+ *         limit stops the run (the result then holds the state reached, but
+ *         the run is not complete); SS_EINVAL; SS_ENOMEM.
+ */
+SS_API int ss_simulate(const ss_model *m, const double x0[4],
+                       const ss_sim_opts *o, ss_sim_result *r, ss_diag *d);
+
+/** Release what ss_simulate() allocated.  NULL-safe; zeroes @a r. */
+SS_API void ss_sim_result_free(ss_sim_result *r);
+
+/* ------------------------------------------------------------------------ */
+/* Periodic orbits and their stability                                       */
+/* ------------------------------------------------------------------------ */
+
+#define SS_MAX_PHASES 16
+
+/** Orbit kinds the solver is asked for. */
+typedef enum ss_orbit_kind {
+  SS_ORBIT_OVERSHOOT = 1,  /**< slip, overshoot, stick (section 3) */
+  SS_ORBIT_STICKSLIP = 2,  /**< slip, stick */
+  SS_ORBIT_OTHER = 4,      /**< any other sequence, found on the Poincare map */
+  SS_ORBIT_ALL = 7
+} ss_orbit_kind;
+
+/** "overshoot", "stick-slip", "other". */
+SS_API const char *ss_orbit_kind_name(ss_orbit_kind k);
+
+/** How far each constraint of an orbit is from being violated. */
+typedef struct ss_margin {
+  double value;    /**< >= 0 when satisfied; the smaller, the closer */
+  int phase;       /**< index of the phase it is measured in */
+  double t;        /**< local time in that phase */
+} ss_margin;
+
+/** A periodic orbit: its phases starting at the stick -> slip point. */
+typedef struct ss_orbit {
+  ss_orbit_kind kind;
+  int n_phases;
+  ss_mode modes[SS_MAX_PHASES];
+  double durations[SS_MAX_PHASES];
+  double period;
+  int n_turns;          /**< returns to the section per period (period-k) */
+  double z0[4];         /**< state at the start in z = x - (d0, 0) */
+  double x0[4];         /**< the same in x */
+  /* margins */
+  ss_margin start_force;  /**< chi(x2-x1) at the start is ur: residual */
+  ss_margin slip_below;   /**< min over slip phases of V - max interior x2' */
+  ss_margin over_above;   /**< min over overshoot phases of min interior x2' - V */
+  ss_margin stick_inside; /**< min over stick of ur - |chi (x2 - x1)| (interior) */
+  ss_margin switch_ok;    /**< at slip ends: how far the next mode's condition holds */
+  ss_margin min_margin;   /**< the smallest of the above */
+  double residual;        /**< max-norm of the orbit equations at the root */
+  double closure;         /**< |P(z0) - z0| by simulation (independent) */
+  /* stability */
+  double jac[2][2];       /**< analytic Jacobian of the Poincare map in (z1, z1') */
+  double jac_fd[2][2];    /**< finite-difference Jacobian by simulation */
+  double jac_diff;        /**< max |jac - jac_fd| */
+  double eig_re[2], eig_im[2];
+  double spectral_radius;
+  int stable;             /**< spectral radius < 1 */
+  int iterations;         /**< solver iterations for this orbit */
+} ss_orbit;
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* STICKSLIP_H */

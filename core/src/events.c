@@ -1,0 +1,284 @@
+/*
+ * events.c: certified location of the first zero of a switching function.
+ *
+ * Every switching function of the model is a short trigonometric sum plus a
+ * line, g(t) = c0 + c1 t + sum_k a_k cos(w_k t) + b_k sin(w_k t), whose
+ * derivatives are bounded by the modal amplitudes R_k = hypot(a_k, b_k):
+ * |g''| <= M2 = sum R_k w_k^2 and |g'''| <= M3 = sum R_k w_k^3.  From a point
+ * a where g(a) < 0 the Taylor bounds
+ *
+ *   g(a+h) <= g(a) + g'(a) h + M2 h^2 / 2                              (Q)
+ *   g(a+h) <= g(a) + g'(a) h + g''(a) h^2 / 2 + M3 h^3 / 6             (C)
+ *
+ * give steps over which g provably stays negative; stepping by the larger
+ * certified step never passes a zero, however close two zeros are, and
+ * converges quadratically onto a simple zero.  This is the safe-step idea of
+ * interval root isolation (R. E. Moore, "Methods and Applications of
+ * Interval Analysis", SIAM 1979, ch. 7) specialised to a known derivative
+ * bound.  The bounds hold in exact arithmetic; the tolerance tol below
+ * absorbs the rounding of the evaluation of g.
+ */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "internal.h"
+
+/* A zero within tol = TOL_ULPS * DBL_EPSILON * scale is indistinguishable
+ * from rounding noise in the evaluation of g (a sum of at most 2 + 2n terms
+ * of size <= scale, each with a relative error of a few ulps). */
+#define TOL_ULPS 16.0
+/* Never more steps than this in one search: a safeguard, not a limit that a
+ * well-posed search reaches (each step covers at least a certified piece). */
+#define MAX_STEPS 2000000
+
+void ss_trig_eval(const ss_trig *g, double t, int order, double *out) {
+  out[0] = g->c0 + g->c1 * t;
+  if (order >= 1)
+    out[1] = g->c1;
+  if (order >= 2)
+    out[2] = 0;
+  if (order >= 3)
+    out[3] = 0;
+  for (int k = 0; k < g->n; k++) {
+    double w = g->w[k], c = cos(w * t), s = sin(w * t);
+    double A = g->a[k] * c + g->b[k] * s;
+    out[0] += A;
+    if (order >= 1) {
+      double B = g->b[k] * c - g->a[k] * s;
+      out[1] += w * B;
+      if (order >= 2)
+        out[2] -= w * w * A;
+      if (order >= 3)
+        out[3] -= w * w * w * B;
+    }
+  }
+}
+
+typedef struct bounds {
+  double M2, M3, amp; /* derivative bounds and sum of amplitudes */
+} bounds;
+
+static void get_bounds(const ss_trig *g, bounds *b) {
+  b->M2 = b->M3 = b->amp = 0;
+  for (int k = 0; k < g->n; k++) {
+    double R = hypot(g->a[k], g->b[k]), w = g->w[k];
+    b->amp += R;
+    b->M2 += R * w * w;
+    b->M3 += R * w * w * w;
+  }
+}
+
+static double tol_at(const ss_trig *g, const bounds *b, double t) {
+  return TOL_ULPS * DBL_EPSILON * (fabs(g->c0) + fabs(g->c1 * t) + b->amp);
+}
+
+/* The first positive zero of p(h) = g0 + g1 h + (M/2) h^2, g0 < 0, M >= 0:
+ * the largest step certified by (Q).  Written without cancellation. */
+static double quad_step(double g0, double g1, double M) {
+  if (M <= 0)
+    return g1 > 0 ? -g0 / g1 : INFINITY;
+  double disc = sqrt(g1 * g1 - 2 * M * g0);
+  return g1 >= 0 ? -2 * g0 / (g1 + disc) : (disc - g1) / M;
+}
+
+/* A longer step certified by (C): the largest of 2, 4, ..., 64 times the (Q)
+ * step over which the cubic bound p stays negative.  The maximum of p over
+ * [0, h] is at h or at p's local maximum (the smaller root of p'), so both
+ * are checked.  Returns 0 when (C) certifies no more than (Q). */
+static double cubic_step(double g0, double g1, double g2, double M3,
+                         double hq) {
+  if (M3 <= 0)
+    return 0;
+  double best = 0;
+  for (double f = 2; f <= 64; f *= 2) {
+    double h = f * hq;
+    double ph = g0 + h * (g1 + h * (g2 / 2 + h * M3 / 6));
+    if (!(ph < 0))
+      break;
+    /* p'(s) = g1 + g2 s + M3 s^2/2 = 0: the local maximum is the smaller
+     * root, where p'' = g2 + M3 s < 0. */
+    double D = g2 * g2 - 2 * M3 * g1;
+    if (D > 0) {
+      double r = sqrt(D);
+      double smax = (-g2 - r) / M3; /* maximum of p: the smaller root */
+      if (smax > 0 && smax < h) {
+        double pm = g0 + smax * (g1 + smax * (g2 / 2 + smax * M3 / 6));
+        if (!(pm < 0))
+          break;
+      }
+    }
+    best = h;
+  }
+  return best;
+}
+
+/* Direction in which g leaves t0 when g(t0) is within tol of zero: -1 down
+ * (into g < 0), +1 up, judged by the first derivative that is clearly not
+ * rounding noise. */
+static int departure(const bounds *b, double tol, const double v[4]) {
+  double slope_tol = 4 * sqrt(2 * tol * b->M2);
+  if (v[1] > slope_tol)
+    return 1;
+  if (v[1] < -slope_tol)
+    return -1;
+  if (v[2] > 0)
+    return 1;
+  if (v[2] < 0)
+    return -1;
+  return v[3] > 0 ? 1 : -1;
+}
+
+/* From t0 with g(t0) ~ 0 and g leaving downward, a later point where g is
+ * certified below -tol with g < tol on the whole way there. */
+static double escape(const ss_trig *g, const bounds *b, double t0, double tol,
+                     const double v[4]) {
+  double h;
+  if (v[1] < 0 && b->M2 > 0) {
+    h = -v[1] / b->M2; /* minimum of the (Q) bound */
+    if (v[0] + v[1] * h + b->M2 * h * h / 2 < -tol)
+      return t0 + h;
+  }
+  h = (v[2] < 0 && b->M3 > 0) ? -v[2] / b->M3 : 1e-3;
+  for (int i = 0; i < 200; i++, h *= 0.5) {
+    double p = v[0] + h * (fmax(v[1], 0) + h * (v[2] / 2 + h * b->M3 / 6));
+    if (p < -tol)
+      return t0 + h;
+    double u[4];
+    ss_trig_eval(g, t0 + h, 1, u);
+    if (u[0] < -tol && p < tol)
+      return t0 + h;
+  }
+  return t0 + h;
+}
+
+/* Refine a zero known to lie in [lo, hi] with g(lo) <= 0 <= g(hi): Newton
+ * steps kept inside the bracket, bisection when Newton leaves it. */
+static double polish(const ss_trig *g, double lo, double hi, double t) {
+  for (int i = 0; i < 100; i++) {
+    double v[2];
+    ss_trig_eval(g, t, 1, v);
+    if (v[0] == 0)
+      return t;
+    if (v[0] < 0)
+      lo = t;
+    else
+      hi = t;
+    double tn = v[1] > 0 ? t - v[0] / v[1] : 0.5 * (lo + hi);
+    if (!(tn > lo && tn < hi))
+      tn = 0.5 * (lo + hi);
+    if (fabs(tn - t) <= 2 * DBL_EPSILON * fabs(t) || hi - lo <= 0)
+      return tn;
+    t = tn;
+  }
+  return t;
+}
+
+/* At a point a where g(a) >= -tol after certified steps from below, decide
+ * between a crossing (return SS_OK, *t the zero) and a tangency (SS_GRAZING,
+ * *t the touching maximum).  A crossing has a slope well above the rounding
+ * level; otherwise the nearby maximum of g (Newton on g') decides: a maximum
+ * no higher than tol is a tangency, a higher one means g crosses zero
+ * between a and the maximum. */
+static int classify(const ss_trig *g, const bounds *b, double a, double tol,
+                    double *t) {
+  double v[3];
+  ss_trig_eval(g, a, 2, v);
+  double slope_tol = 4 * sqrt(2 * tol * b->M2);
+  if (v[1] > slope_tol) {
+    double d = 4 * (tol + fabs(v[0])) / v[1];
+    *t = polish(g, a - d, a + d, a);
+    return SS_OK;
+  }
+  double s = a;
+  int found = 0;
+  for (int i = 0; i < 60; i++) {
+    double u[3];
+    ss_trig_eval(g, s, 2, u);
+    if (!(u[2] < 0))
+      break;
+    double ds = -u[1] / u[2];
+    s += ds;
+    if (fabs(ds) <= 4 * DBL_EPSILON * fmax(1.0, fabs(s))) {
+      found = 1;
+      break;
+    }
+  }
+  if (!found) {
+    /* No maximum nearby (g'' >= 0): g rises from a flat start. */
+    *t = a;
+    return SS_OK;
+  }
+  double gs[1];
+  ss_trig_eval(g, s, 0, gs);
+  if (gs[0] <= tol) {
+    *t = s;
+    return SS_GRAZING;
+  }
+  *t = polish(g, a, s, a);
+  return SS_OK;
+}
+
+int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
+  bounds b;
+  double v[4], a = t0;
+  if (!g || !t || g->n < 0 || g->n > SS_TRIG_MAX || !isfinite(t0) ||
+      !(tmax > t0))
+    return SS_EINVAL;
+  get_bounds(g, &b);
+  double tol = tol_at(g, &b, t0);
+  if (g->c1 == 0 && g->c0 + b.amp < -tol) {
+    *t = INFINITY;
+    return SS_NEVER;
+  }
+  ss_trig_eval(g, t0, 3, v);
+  if (v[0] > tol)
+    return SS_EINVAL;
+  if (v[0] >= -tol) {
+    if (departure(&b, tol, v) > 0) {
+      *t = t0;
+      return SS_OK;
+    }
+    a = escape(g, &b, t0, tol, v);
+  }
+  for (long it = 0; it < MAX_STEPS; it++) {
+    if (a >= tmax) {
+      *t = tmax;
+      return SS_HORIZON;
+    }
+    ss_trig_eval(g, a, 2, v);
+    tol = tol_at(g, &b, a);
+    if (v[0] >= -tol)
+      return classify(g, &b, a, tol, t);
+    double hq = quad_step(v[0], v[1], b.M2);
+    double hc = cubic_step(v[0], v[1], v[2], b.M3, hq);
+    double h = fmax(hq, hc);
+    if (!(h > 0) || a + h == a) {
+      /* Cannot move: g is within rounding of zero here. */
+      return classify(g, &b, a, tol, t);
+    }
+    a += h;
+  }
+  *t = a;
+  return SS_ENOCONV;
+}
+
+/* Internal use: the tolerance and departure rule, so that the mode rule at a
+ * threshold agrees with the event finder. */
+int ss__trig_at_zero(const ss_trig *g, double t0, int *dir) {
+  bounds b;
+  double v[4];
+  get_bounds(g, &b);
+  double tol = tol_at(g, &b, t0);
+  ss_trig_eval(g, t0, 3, v);
+  if (v[0] > tol) {
+    *dir = 1;
+    return 0;
+  }
+  if (v[0] < -tol) {
+    *dir = -1;
+    return 0;
+  }
+  *dir = departure(&b, tol, v);
+  return 1;
+}
