@@ -250,8 +250,10 @@ int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
     tol = tol_at(g, &b, a);
     if (v[0] >= -tol)
       return classify(g, &b, a, tol, t);
-    double hq = quad_step(v[0], v[1], b.M2);
-    double hc = cubic_step(v[0], v[1], v[2], b.M3, hq);
+    /* The bounds are applied to g(a) + tol, the largest value the exact
+     * g(a) can have, so that the rounding of g cannot fake a certificate. */
+    double hq = quad_step(v[0] + tol, v[1], b.M2);
+    double hc = cubic_step(v[0] + tol, v[1], v[2], b.M3, hq);
     double h = fmax(hq, hc);
     if (!(h > 0) || a + h == a) {
       /* Cannot move: g is within rounding of zero here. */

@@ -1,1 +1,356 @@
-int main(void){return 0;}
+/*
+ * test_simulate.c: event-driven simulation against the independent rk8pd
+ * reference (tests/ref), on the paper's data set and on grazing, threshold,
+ * perpetual-slip, scaling, sampling and limit cases.
+ */
+#include <string.h>
+
+#include <gsl/gsl_errno.h>
+
+#include "refsim.h"
+#include "stickslip.h"
+#include "test.h"
+
+static const ss_params PAPER = {0.2, 4.0, 0.0724, 0.6178, 1.0};
+/* The paper's printed stick -> slip state (section 5), in z coordinates. */
+static const double PAPER_Z0[4] = {1.1844, 3.9116, -0.8075, 1.0};
+
+static ref_opts tight(void) {
+  ref_opts o = {gsl_odeiv2_step_rk8pd, 1e-13, 1e-13, 0, 1e-13};
+  return o;
+}
+
+/* EVIDENCE: issue 2 "the paper's data set ... started from the stick -> slip
+ * state printed in section 5: slip, overshoot and stick with durations close
+ * to the paper's tau, tau1, tau2" */
+static void test_paper_run(void) {
+  ss_model m;
+  ss_model_init(&m, &PAPER, NULL);
+  double x0[4];
+  ss_z_to_x(&m, PAPER_Z0, x0);
+  ASSERT_EQ_INT(ss_mode_of_state(&m, x0), SS_MODE_SLIP);
+  ss_sim_opts o = {0};
+  o.t_end = 60;
+  o.record_events = 1;
+  ss_sim_result r;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &r, NULL), SS_OK);
+  ASSERT_TRUE(r.n_events >= 3);
+  ASSERT_EQ_INT(r.events[0].from, SS_MODE_SLIP);
+  ASSERT_EQ_INT(r.events[0].to, SS_MODE_OVERSHOOT);
+  ASSERT_EQ_INT(r.events[1].to, SS_MODE_STICK);
+  ASSERT_EQ_INT(r.events[2].to, SS_MODE_SLIP);
+  double tau = r.events[0].t, tau1 = r.events[1].t - tau,
+         tau2 = r.events[2].t - r.events[1].t;
+  printf("paper state: tau %.6f tau1 %.6f tau2 %.6f (paper 4.5, 2.717, "
+         "3.0536)\n",
+         tau, tau1, tau2);
+  ASSERT_NEAR(tau, 4.5, 0.02);
+  ASSERT_NEAR(tau1, 2.717, 0.02);
+  ASSERT_NEAR(tau2, 3.0536, 0.02);
+  /* against the reference, event by event */
+  ref_params rp = {PAPER.chi, PAPER.eta, PAPER.us, PAPER.ur, PAPER.V};
+  ref_event rev[64];
+  ref_opts ro = tight();
+  double xe[4];
+  int me;
+  long n = ref_simulate(&rp, 0, x0, REF_SLIP, 60, &ro, rev, 64, xe, &me);
+  ASSERT_EQ_INT(n, (long)r.n_events);
+  double maxdt = 0;
+  for (long i = 0; i < n && i < (long)r.n_events; i++) {
+    ASSERT_EQ_INT(rev[i].from, r.events[i].from);
+    ASSERT_EQ_INT(rev[i].to, r.events[i].to);
+    ASSERT_NEAR(rev[i].t, r.events[i].t, 1e-8);
+    maxdt = fmax(maxdt, fabs(rev[i].t - r.events[i].t));
+  }
+  for (int i = 0; i < 4; i++)
+    ASSERT_NEAR(xe[i], r.x[i], 1e-7);
+  printf("paper state: %zu events to t = 60, max |t - t_ref| = %.3g\n",
+         r.n_events, maxdt);
+  ss_sim_result_free(&r);
+}
+
+/* Random states and parameter sets: the same event sequence and times as the
+ * reference, including slip -> overshoot -> slip without a stick. */
+static void test_battery(void) {
+  const ss_params sets[] = {
+      {0.2, 4.0, 0.0724, 0.6178, 1.0}, {0.5, 1.0, 0.1, 0.3, 0.7},
+      {0.05, 20.0, 0.02, 0.5, 2.0},    {0.9, 0.1, 0.3, 0.4, 0.2},
+      {0.3, 2.0, 0.05, 0.9, 1.0},
+  };
+  unsigned long seed = 99;
+  int runs = 0, agree = 0;
+  size_t n_s2o = 0, n_o2s = 0;
+  double maxdt = 0;
+  for (size_t s = 0; s < sizeof sets / sizeof sets[0]; s++) {
+    ss_model m;
+    ss_model_init(&m, &sets[s], NULL);
+    ref_params rp = {m.p.chi, m.p.eta, m.p.us, m.p.ur, m.p.V};
+    for (int k = 0; k < 8; k++) {
+      double x0[4];
+      for (int i = 0; i < 4; i++) {
+        seed = seed * 6364136223846793005UL + 1442695040888963407UL;
+        x0[i] = 3 * ((double)(seed >> 11) / 9007199254740992.0 - 0.5);
+      }
+      x0[0] += m.d0[0];
+      x0[1] += m.d0[1];
+      ss_sim_opts o = {0};
+      o.t_end = 40;
+      o.record_events = 1;
+      ss_sim_result r;
+      if (ss_simulate(&m, x0, &o, &r, NULL) != SS_OK)
+        continue;
+      ref_event rev[256];
+      ref_opts ro = tight();
+      double xe[4];
+      int me;
+      long n = ref_simulate(&rp, 0, x0, (int)ss_mode_of_state(&m, x0), 40, &ro,
+                            rev, 256, xe, &me);
+      runs++;
+      int ok = n == (long)r.n_events;
+      for (long i = 0; ok && i < n; i++) {
+        ok = rev[i].from == (int)r.events[i].from &&
+             rev[i].to == (int)r.events[i].to &&
+             fabs(rev[i].t - r.events[i].t) < 1e-7;
+        maxdt = fmax(maxdt, fabs(rev[i].t - r.events[i].t));
+        if (r.events[i].from == SS_MODE_SLIP &&
+            r.events[i].to == SS_MODE_OVERSHOOT)
+          n_s2o++;
+        if (r.events[i].from == SS_MODE_OVERSHOOT &&
+            r.events[i].to == SS_MODE_SLIP)
+          n_o2s++;
+      }
+      if (!ok)
+        printf("battery: set %zu state %d: %ld reference events, %zu here\n",
+               s, k, n, r.n_events);
+      agree += ok;
+      ss_sim_result_free(&r);
+    }
+  }
+  printf("battery: %d/%d runs agree with rk8pd, max |dt| %.3g; %zu slip->"
+         "overshoot, %zu overshoot->slip\n",
+         agree, runs, maxdt, n_s2o, n_o2s);
+  ASSERT_EQ_INT(agree, runs);
+  ASSERT_TRUE(runs >= 35);
+  ASSERT_TRUE(n_s2o > 0 && n_o2s > 0);
+}
+
+/* EVIDENCE: issue 2 "Scaling: multiplying V, us, ur and the initial state by
+ * the same factor scales every state of the run and leaves every event time
+ * unchanged, to 1e-12" */
+static void test_scaling(void) {
+  ss_model m1, m2;
+  ss_model_init(&m1, &PAPER, NULL);
+  double x0[4];
+  ss_z_to_x(&m1, PAPER_Z0, x0);
+  const double factors[] = {1e-3, 0.37, 8.0, 1e4};
+  for (size_t f = 0; f < 4; f++) {
+    double c = factors[f];
+    ss_params p = PAPER;
+    p.V *= c;
+    p.us *= c;
+    p.ur *= c;
+    ss_model_init(&m2, &p, NULL);
+    double y0[4] = {c * x0[0], c * x0[1], c * x0[2], c * x0[3]};
+    ss_sim_opts o = {0};
+    o.t_end = 200;
+    o.record_events = 1;
+    ss_sim_result r1, r2;
+    ASSERT_EQ_INT(ss_simulate(&m1, x0, &o, &r1, NULL), SS_OK);
+    ASSERT_EQ_INT(ss_simulate(&m2, y0, &o, &r2, NULL), SS_OK);
+    ASSERT_EQ_INT(r1.n_events, r2.n_events);
+    double maxdt = 0, maxdx = 0;
+    for (size_t i = 0; i < r1.n_events && i < r2.n_events; i++) {
+      ASSERT_EQ_INT(r1.events[i].to, r2.events[i].to);
+      maxdt = fmax(maxdt, fabs(r1.events[i].t - r2.events[i].t));
+      for (int j = 0; j < 4; j++)
+        maxdx = fmax(maxdx, fabs(r2.events[i].x[j] / c - r1.events[i].x[j]));
+    }
+    ASSERT_NEAR(maxdt, 0, 1e-12);
+    ASSERT_NEAR(maxdx, 0, 1e-12);
+    printf("scaling by %g: %zu events, max |dt| %.3g, max |dx/c| %.3g\n", c,
+           r1.n_events, maxdt, maxdx);
+    ss_sim_result_free(&r1);
+    ss_sim_result_free(&r2);
+  }
+}
+
+/* EVIDENCE: issue 2.3 grazing in slip is reported, and the mass sticks */
+static void test_slip_grazing(void) {
+  ss_model m;
+  ss_model_init(&m, &PAPER, NULL);
+  double V = m.p.V;
+  /* at the touch: z1 = z2 (so x2'' = 0), z1' < V (so x2''' < 0) */
+  double zt[4] = {0.3, 0.3, 0.2, V}, xt[4], x0[4];
+  ss_z_to_x(&m, zt, xt);
+  double T = 3.7;
+  ss_flow(&m, SS_MODE_SLIP, -T, xt, x0);
+  ss_sim_opts o = {0};
+  o.t_end = 10;
+  o.record_events = 1;
+  ss_sim_result r;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &r, NULL), SS_OK);
+  ASSERT_TRUE(r.n_events >= 1);
+  ASSERT_EQ_INT(r.events[0].kind, SS_EVENT_GRAZING);
+  ASSERT_EQ_INT(r.events[0].from, SS_MODE_SLIP);
+  ASSERT_EQ_INT(r.events[0].to, SS_MODE_STICK);
+  ASSERT_NEAR(r.events[0].t, T, 1e-6);
+  ASSERT_EQ_INT(r.n_grazing, 1);
+  ss_sim_result_free(&r);
+  /* a near miss 1e-9 below V: no event at T */
+  double zn[4] = {0.3, 0.3, 0.2, V - 1e-9}, xn[4];
+  ss_z_to_x(&m, zn, xn);
+  ss_flow(&m, SS_MODE_SLIP, -T, xn, x0);
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &r, NULL), SS_OK);
+  ASSERT_TRUE(r.n_events == 0 || r.events[0].t > T + 0.1);
+  ss_sim_result_free(&r);
+}
+
+/* EVIDENCE: issue 2.3 a stick whose force touches ur is reported and the
+ * stick goes on */
+static void test_stick_grazing(void) {
+  ss_model m;
+  ss_model_init(&m, &PAPER, NULL);
+  double chi = m.p.chi, ur = m.p.ur, V = m.p.V;
+  double X = 0.5 * ur / (chi * (1 - chi));
+  double xt[4] = {X - ur / chi, X, V, V}, x0[4];
+  double T = 1.3;
+  ss_flow(&m, SS_MODE_STICK, -T, xt, x0);
+  ASSERT_TRUE(fabs(ss_stick_force(&m, x0)) < ur);
+  ss_sim_opts o = {0};
+  o.t_end = T + 0.5;
+  o.record_events = 1;
+  ss_sim_result r;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &r, NULL), SS_OK);
+  ASSERT_TRUE(r.n_events >= 1);
+  ASSERT_EQ_INT(r.events[0].kind, SS_EVENT_GRAZING);
+  ASSERT_EQ_INT(r.events[0].from, SS_MODE_STICK);
+  ASSERT_EQ_INT(r.events[0].to, SS_MODE_STICK);
+  ASSERT_NEAR(r.events[0].t, T, 1e-6);
+  ASSERT_EQ_INT(r.mode, SS_MODE_STICK);
+  ss_sim_result_free(&r);
+}
+
+/* EVIDENCE: issue 2.3 perpetual slip is recognised without searching */
+static void test_perpetual(void) {
+  ss_model m;
+  ss_model_init(&m, &PAPER, NULL);
+  double z0[4] = {0.05, -0.02, 0.1, 0.1}, x0[4];
+  ss_z_to_x(&m, z0, x0);
+  ss_sim_opts o = {0};
+  o.t_end = 1e9;
+  ss_sim_result r;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &r, NULL), SS_OK);
+  ASSERT_EQ_INT(r.n_events, 0);
+  ASSERT_EQ_INT(r.perpetual, 1);
+  ASSERT_EQ_INT(r.mode, SS_MODE_SLIP);
+  ss_sim_result_free(&r);
+}
+
+/* EVIDENCE: header, a state at the threshold follows ss_mode_of_state */
+static void test_threshold_start(void) {
+  ss_model m;
+  ss_model_init(&m, &PAPER, NULL);
+  double chi = m.p.chi, ur = m.p.ur, V = m.p.V;
+  /* force exactly ur, falling back inside: a stick that starts at the
+   * threshold and lasts */
+  double x0[4] = {0, ur / chi, 1.5, V};
+  ss_sim_opts o = {0};
+  o.t_end = 0.5;
+  o.record_events = 1;
+  ss_sim_result r;
+  ASSERT_EQ_INT(ss_mode_of_state(&m, x0), SS_MODE_STICK);
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &r, NULL), SS_OK);
+  ASSERT_EQ_INT(r.n_events, 0);
+  ASSERT_EQ_INT(r.mode, SS_MODE_STICK);
+  ss_sim_result_free(&r);
+  /* force exactly ur and rising: slip at once, no zero-length stick */
+  x0[2] = -0.8;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &r, NULL), SS_OK);
+  ASSERT_EQ_INT(r.mode, SS_MODE_SLIP);
+  ASSERT_EQ_INT(r.n_events, 0);
+  ss_sim_result_free(&r);
+}
+
+/* Samples are the closed form; a final-state request allocates nothing. */
+static void test_samples_and_limits(void) {
+  ss_model m;
+  ss_model_init(&m, &PAPER, NULL);
+  double x0[4];
+  ss_z_to_x(&m, PAPER_Z0, x0);
+  ss_sim_opts o = {0};
+  o.t_end = 30;
+  ss_sim_result r, rs;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &r, NULL), SS_OK);
+  ASSERT_TRUE(r.events == NULL && r.st == NULL && r.sx == NULL);
+  ASSERT_TRUE(r.n_events > 5);
+  o.n_samples = 301;
+  o.sample_from = 0;
+  o.sample_to = 30;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &rs, NULL), SS_OK);
+  ASSERT_EQ_INT(rs.n_samples, 301);
+  ASSERT_NEAR(rs.st[300], 30, 0);
+  for (int i = 0; i < 4; i++)
+    ASSERT_NEAR(rs.sx[4 * 300 + i], r.x[i], 1e-15);
+  /* sample 45 (t = 4.5) against a stop at that time */
+  ss_sim_opts o2 = {0};
+  o2.t_end = rs.st[45];
+  ss_sim_result r2;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o2, &r2, NULL), SS_OK);
+  for (int i = 0; i < 4; i++)
+    ASSERT_NEAR(rs.sx[4 * 45 + i], r2.x[i], 1e-15);
+  ss_sim_result_free(&r2);
+  ss_sim_result_free(&rs);
+  /* limits */
+  ss_diag d;
+  ss_diag_clear(&d);
+  o.max_samples = 100;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &rs, &d), SS_ELIMIT_SAMPLES);
+  ASSERT_TRUE(strcmp(d.where, "samples") == 0);
+  o.max_samples = 0;
+  o.n_samples = 0;
+  o.max_events = 3;
+  ss_diag_clear(&d);
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &rs, &d), SS_ELIMIT_EVENTS);
+  ASSERT_EQ_INT(rs.n_events, 3);
+  ss_sim_result_free(&rs);
+  o.max_events = 0;
+  o.stop_after = 3;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &rs, NULL), SS_OK);
+  ASSERT_EQ_INT(rs.n_events, 3);
+  ASSERT_EQ_INT(rs.mode, SS_MODE_SLIP);
+  ss_sim_result_free(&rs);
+  ss_sim_result_free(&r);
+  o.stop_after = 0;
+  o.t_end = -1;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &rs, NULL), SS_EINVAL);
+}
+
+/* EVIDENCE: issue 2 "A run of 10^5 events completes" */
+static void test_long_run(void) {
+  ss_model m;
+  ss_model_init(&m, &PAPER, NULL);
+  double x0[4];
+  ss_z_to_x(&m, PAPER_Z0, x0);
+  ss_sim_opts o = {0};
+  o.t_end = 1e300;
+  o.stop_after = 100000;
+  ss_sim_result r;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &r, NULL), SS_OK);
+  ASSERT_EQ_INT(r.n_events, 100000);
+  printf("10^5 events: t = %.6f, final mode %s\n", r.t, ss_mode_name(r.mode));
+  ss_sim_result_free(&r);
+}
+
+int main(void) {
+  gsl_set_error_handler_off();
+  test_paper_run();
+  test_battery();
+  test_scaling();
+  test_slip_grazing();
+  test_stick_grazing();
+  test_perpetual();
+  test_threshold_start();
+  test_samples_and_limits();
+  test_long_run();
+  TEST_DONE();
+}
