@@ -63,6 +63,7 @@ extern "C" {
   X(GRAZING, 1, "trajectory touches a switching surface tangentially")       \
   X(HORIZON, 2, "no event before the horizon")                               \
   X(NEVER, 3, "the switching function can never reach zero")                 \
+  X(INFEASIBLE, 4, "a root of the orbit equations that violates a constraint") \
   X(EDOMAIN, -1, "parameter outside its domain")                             \
   X(EINVAL, -2, "invalid argument")                                          \
   X(ENOCONV, -3, "iteration did not converge")                               \
@@ -416,54 +417,173 @@ SS_API void ss_sim_result_free(ss_sim_result *r);
 /* Periodic orbits and their stability                                       */
 /* ------------------------------------------------------------------------ */
 
+/*
+ * An orbit is described from its stick -> slip point, on the section Sigma0
+ * of (4.2): x2' = V and chi (x2 - x1) = ur.  A point of Sigma0 is given by
+ * the two coordinates s = (z1, z1'); z2 = z1 + (ur - us)/chi, z2' = V.
+ * Its phases are a sequence of modes starting with slip and ending with a
+ * stick that ends at +ur (back on Sigma0).
+ */
+
 #define SS_MAX_PHASES 16
 
-/** Orbit kinds the solver is asked for. */
+/** Orbit kinds. */
 typedef enum ss_orbit_kind {
-  SS_ORBIT_OVERSHOOT = 1,  /**< slip, overshoot, stick (section 3) */
-  SS_ORBIT_STICKSLIP = 2,  /**< slip, stick */
-  SS_ORBIT_OTHER = 4,      /**< any other sequence, found on the Poincare map */
+  SS_ORBIT_OVERSHOOT = 1, /**< slip, overshoot, stick (section 3) */
+  SS_ORBIT_STICKSLIP = 2, /**< slip, stick */
+  SS_ORBIT_OTHER = 4,     /**< any other sequence, or period k > 1 */
   SS_ORBIT_ALL = 7
 } ss_orbit_kind;
 
 /** "overshoot", "stick-slip", "other". */
 SS_API const char *ss_orbit_kind_name(ss_orbit_kind k);
 
-/** How far each constraint of an orbit is from being violated. */
+/** The kind of a phase sequence (OVERSHOOT, STICKSLIP or OTHER). */
+SS_API ss_orbit_kind ss_orbit_kind_of(int n, const ss_mode *modes);
+
+/** How far a constraint is from being violated, and where. */
 typedef struct ss_margin {
-  double value;    /**< >= 0 when satisfied; the smaller, the closer */
-  int phase;       /**< index of the phase it is measured in */
-  double t;        /**< local time in that phase */
+  double value; /**< >= 0 when satisfied; INFINITY when it never binds */
+  int phase;    /**< index of the phase it is measured in (-1: none) */
+  double t;     /**< local time in that phase */
 } ss_margin;
 
-/** A periodic orbit: its phases starting at the stick -> slip point. */
+/** The stability of an orbit: the Poincare map on Sigma0 in (z1, z1'). */
+typedef struct ss_stab {
+  double jac[2][2];    /**< analytic Jacobian (section 4, derived anew) */
+  double jac_fd[2][2]; /**< central differences of the map by simulation */
+  double jac_diff;     /**< max |jac - jac_fd|; NAN if jac_fd not computed */
+  double eig_re[2], eig_im[2];
+  double spectral_radius;
+  int stable; /**< spectral radius < 1 (stable in the paper's sense, sec. 4) */
+} ss_stab;
+
+/** A periodic orbit. */
 typedef struct ss_orbit {
   ss_orbit_kind kind;
   int n_phases;
   ss_mode modes[SS_MAX_PHASES];
   double durations[SS_MAX_PHASES];
   double period;
-  int n_turns;          /**< returns to the section per period (period-k) */
-  double z0[4];         /**< state at the start in z = x - (d0, 0) */
-  double x0[4];         /**< the same in x */
-  /* margins */
-  ss_margin start_force;  /**< chi(x2-x1) at the start is ur: residual */
-  ss_margin slip_below;   /**< min over slip phases of V - max interior x2' */
-  ss_margin over_above;   /**< min over overshoot phases of min interior x2' - V */
-  ss_margin stick_inside; /**< min over stick of ur - |chi (x2 - x1)| (interior) */
-  ss_margin switch_ok;    /**< at slip ends: how far the next mode's condition holds */
-  ss_margin min_margin;   /**< the smallest of the above */
-  double residual;        /**< max-norm of the orbit equations at the root */
-  double closure;         /**< |P(z0) - z0| by simulation (independent) */
-  /* stability */
-  double jac[2][2];       /**< analytic Jacobian of the Poincare map in (z1, z1') */
-  double jac_fd[2][2];    /**< finite-difference Jacobian by simulation */
-  double jac_diff;        /**< max |jac - jac_fd| */
-  double eig_re[2], eig_im[2];
-  double spectral_radius;
-  int stable;             /**< spectral radius < 1 */
-  int iterations;         /**< solver iterations for this orbit */
+  int n_turns;   /**< passes through Sigma0 per period (period-k: k) */
+  double z0[4];  /**< start (stick -> slip point) in z = x - (d0, 0) */
+  double x0[4];  /**< the same in x */
+  /* Margins of the constraints of section 5, from the certified finder: */
+  ss_margin slip_below;   /**< slip: min of V - x2' at interior maxima */
+  ss_margin over_above;   /**< overshoot: min of x2' - V at interior minima */
+  ss_margin stick_upper;  /**< stick: min of ur - chi(x2-x1) at interior maxima */
+  ss_margin stick_lower;  /**< stick: min of ur + chi(x2-x1) over the phase */
+  ss_margin switching;    /**< at phase ends: how far the mode rule holds,
+                               e.g. -ur - chi(x2-x1) for (3.2) */
+  ss_margin transversal;  /**< min slope of the switching function at the
+                               phase ends (0 would be grazing) */
+  ss_margin min_margin;   /**< the smallest of the value margins above */
+  double residual;        /**< max |F| of the orbit equations at the root */
+  double closure;         /**< max |P^k(s) - s| by simulation */
+  ss_stab stab;
+  int iterations;         /**< Newton iterations of the final solve */
+  int source;             /**< 0 guess, 1 simulation, 2 duration grid,
+                               3 Poincare-map Newton */
 } ss_orbit;
+
+/** Options of ss_orbit_find(); zero-initialise for the defaults. */
+typedef struct ss_orbit_opts {
+  unsigned kinds;       /**< mask of ss_orbit_kind; 0 means all */
+  int n_guess;          /**< > 0: start from this guess only */
+  ss_mode guess_modes[SS_MAX_PHASES]; /**< its sequence (default: by kinds) */
+  double guess[SS_MAX_PHASES];        /**< its durations */
+  int max_period;       /**< largest k for period-k orbits (default 4) */
+  int effort;           /**< 1 coarse, 2 default, 3 fine search */
+  int no_fd;            /**< skip the finite-difference Jacobian */
+  double max_seconds;   /**< time budget (0: none) */
+} ss_orbit_opts;
+
+/** What the search did. */
+typedef struct ss_orbit_report {
+  int simulations;    /**< simulations to an attractor */
+  int newton_starts;  /**< Newton solves started (durations and map) */
+  int roots;          /**< converged roots */
+  int infeasible;     /**< roots rejected as physically inadmissible */
+  int duplicates;     /**< roots already found */
+  int truncated;      /**< more orbits than room in the output */
+  char reason[256];   /**< why nothing was found, or the closest rejection */
+} ss_orbit_report;
+
+/**
+ * Solve the orbit equations for the phase sequence @a modes (n phases,
+ * modes[0] = slip, modes[n-1] = stick) from the guess @a tau.
+ *
+ * The unknowns are the n durations.  The start state is eliminated through
+ * the periodicity system (5.1): rows 1-3 of (N - I) z0 + c = 0 (N, c the
+ * affine map of the whole cycle), with the fourth row replaced by z2'(0) = V
+ * (3.1), which with the phase-end conditions implies it.  The n equations are
+ * chi (z2 - z1)(0) = ur - us (3.1) and the end condition of every phase but
+ * the last (x2' = V (3.7) for slip and overshoot, chi(x2-x1) = +-ur for a
+ * stick).  GSL's hybridsj solver uses the analytic Jacobian, built from the
+ * derivatives of the phase transition matrices; two Newton steps polish.
+ *
+ * The root is then checked (ss_orbit_check) and its stability computed.
+ * @return SS_OK (a feasible orbit in @a o); SS_INFEASIBLE (a root that is not
+ *         an orbit: @a o holds it and @a d->text says why); SS_ENOCONV;
+ *         SS_ESINGULAR; SS_EINVAL.
+ */
+SS_API int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
+                          const double *tau, int no_fd, ss_orbit *o,
+                          ss_diag *d);
+
+/**
+ * Check the orbit in @a o (modes, durations, z0 set) by simulation with the
+ * certified event finder: every phase must end at its FIRST crossing, at its
+ * duration, into the next mode of the sequence, without grazing, and all
+ * durations must be positive.  Fills the margins, period and closure.
+ * @return SS_OK or SS_INFEASIBLE with the reason in @a d.
+ */
+SS_API int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d);
+
+/**
+ * Find periodic orbits for the parameters of @a m with no guess (or from the
+ * guess in @a opts): simulation to attractors (stable orbits of any
+ * sequence and period up to max_period), Newton on the duration equations
+ * from a grid of durations for the overshoot and stick-slip kinds (which
+ * finds unstable orbits), and Newton on the Poincare map P^k from points of
+ * Sigma0.  Duplicates are removed; every orbit returned is feasible.
+ * @param out, max_out  room for the orbits, sorted by kind then period
+ * @param[out] n_out    number returned
+ * @param[out] rep      what the search did, may be NULL
+ * @return SS_OK (possibly with *n_out = 0: then rep->reason says why) or a
+ *         failure (SS_ELIMIT_TIME when the budget ran out: *n_out orbits
+ *         were found before).
+ */
+SS_API int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts,
+                         ss_orbit *out, int max_out, int *n_out,
+                         ss_orbit_report *rep, ss_diag *d);
+
+/**
+ * The Poincare map on Sigma0 by simulation: from s = (z1, z1') follow the
+ * motion through @a turns stick -> slip returns.
+ * @param[out] out     the point reached
+ * @param[out] modes, durations, n_phases  the sequence travelled (may be NULL;
+ *                     room for SS_MAX_PHASES)
+ * @param max_events   give up after this many events (SS_ELIMIT_EVENTS)
+ * @return SS_OK, SS_ELIMIT_EVENTS, SS_HORIZON (perpetual slip), or failure.
+ */
+SS_API int ss_poincare(const ss_model *m, const double s[2], int turns,
+                       size_t max_events, double out[2], ss_mode *modes,
+                       double *durations, int *n_phases);
+
+/**
+ * The stability of the orbit given by (@a n, @a modes, @a tau, @a z0):
+ * the analytic Jacobian of the Poincare map, composed from the phase
+ * transition matrices with the switching-time corrections of section 4,
+ *   dZ_{k+1} = (I - f_k n_k^T / (n_k . f_k)) A_k(tau_k) dZ_k,
+ * (f_k the vector field at the end of phase k, n_k the gradient of its
+ * switching function), started from dZ_0 = (x, x, v, 0) on Sigma0 (4.3);
+ * unless @a no_fd, also the central-difference Jacobian of ss_poincare().
+ * @return SS_OK or SS_ESINGULAR (a phase ends tangentially).
+ */
+SS_API int ss_stability(const ss_model *m, int n, const ss_mode *modes,
+                        const double *tau, const double z0[4], int turns,
+                        int no_fd, ss_stab *st);
 
 #ifdef __cplusplus
 }

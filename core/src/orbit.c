@@ -1,0 +1,552 @@
+/*
+ * orbit.c: periodic orbits (sections 3 and 5): the duration equations with
+ * the start state eliminated through (5.1), their feasibility with the
+ * certified event finder, and a search that needs no guess.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_multiroots.h>
+#include <gsl/gsl_vector.h>
+
+#include "internal.h"
+#include "linalg.h"
+
+#define MAXP SS_MAX_PHASES
+
+/* Convergence of the duration equations: max |F| below this many ulps of the
+ * scale of the equations (velocities ~ V, forces ~ ur). */
+#define RESID_ULPS 64.0
+#define MAX_SOLVER_ITERS 100
+
+const char *ss_orbit_kind_name(ss_orbit_kind k) {
+  switch (k) {
+  case SS_ORBIT_OVERSHOOT:
+    return "overshoot";
+  case SS_ORBIT_STICKSLIP:
+    return "stick-slip";
+  case SS_ORBIT_OTHER:
+    return "other";
+  default:
+    return NULL;
+  }
+}
+
+ss_orbit_kind ss_orbit_kind_of(int n, const ss_mode *modes) {
+  if (n == 3 && modes[0] == SS_MODE_SLIP && modes[1] == SS_MODE_OVERSHOOT &&
+      modes[2] == SS_MODE_STICK)
+    return SS_ORBIT_OVERSHOOT;
+  if (n == 2 && modes[0] == SS_MODE_SLIP && modes[1] == SS_MODE_STICK)
+    return SS_ORBIT_STICKSLIP;
+  return SS_ORBIT_OTHER;
+}
+
+/* ---- the duration equations ------------------------------------------- */
+
+typedef struct oeq {
+  const ss_model *m;
+  int n;
+  ss_mode modes[MAXP];
+  int sign[MAXP]; /* stick phase k < n-1: +1 ends at +ur (slip), -1 at -ur */
+} oeq;
+
+static int oeq_init(oeq *q, const ss_model *m, int n, const ss_mode *modes) {
+  if (n < 2 || n > MAXP || modes[0] != SS_MODE_SLIP ||
+      modes[n - 1] != SS_MODE_STICK)
+    return SS_EINVAL;
+  q->m = m;
+  q->n = n;
+  for (int k = 0; k < n; k++) {
+    if (modes[k] != SS_MODE_SLIP && modes[k] != SS_MODE_OVERSHOOT &&
+        modes[k] != SS_MODE_STICK)
+      return SS_EINVAL;
+    if (k > 0 && modes[k] == modes[k - 1])
+      return SS_EINVAL;
+    q->modes[k] = modes[k];
+    q->sign[k] = 0;
+    if (modes[k] == SS_MODE_STICK)
+      q->sign[k] = (k + 1 < n && modes[k + 1] == SS_MODE_OVERSHOOT) ? -1 : 1;
+  }
+  return SS_OK;
+}
+
+/* Gradient of the end condition of phase k (in z). */
+static void end_grad(const oeq *q, int k, double gvec[4]) {
+  memset(gvec, 0, 4 * sizeof *gvec);
+  if (q->modes[k] == SS_MODE_STICK) {
+    gvec[0] = -q->m->p.chi;
+    gvec[1] = q->m->p.chi;
+  } else {
+    gvec[3] = 1;
+  }
+}
+
+static double end_value(const oeq *q, int k, const double Z[4]) {
+  const ss_params *p = &q->m->p;
+  if (q->modes[k] == SS_MODE_STICK)
+    return p->chi * (Z[1] - Z[0]) + p->us - q->sign[k] * p->ur;
+  return Z[3] - p->V;
+}
+
+/* F(tau) and, if J != NULL, its Jacobian (n x n row-major); z0 the start. */
+static int oeq_eval(const oeq *q, const double *tau, double z0[4], double *F,
+                    double *J) {
+  const int n = q->n;
+  const ss_params *p = &q->m->p;
+  double A[MAXP][16], c[MAXP][4], dA[MAXP][16], dc[MAXP][4];
+  double P[MAXP + 1][16], qv[MAXP + 1][4];
+  static const double I4[16] = {1, 0, 0, 0, 0, 1, 0, 0,
+                                0, 0, 1, 0, 0, 0, 0, 1};
+  for (int k = 0; k < n; k++)
+    ss_transition(q->m, q->modes[k], tau[k], A[k], c[k], dA[k], dc[k]);
+  memcpy(P[0], I4, sizeof I4);
+  memset(qv[0], 0, sizeof qv[0]);
+  for (int k = 0; k < n; k++) {
+    mat4_mul(A[k], P[k], P[k + 1]);
+    memcpy(qv[k + 1], c[k], sizeof c[k]);
+    mat4_vec(A[k], qv[k], qv[k + 1], 1);
+  }
+  /* (5.1): rows 1-3 of (N - I) z0 = -c, row 4 replaced by z2'(0) = V. */
+  double B[16], LU[16];
+  int piv[4];
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 4; j++)
+      B[4 * i + j] = P[n][4 * i + j] - (i == j);
+  B[12] = B[13] = B[14] = 0;
+  B[15] = 1;
+  memcpy(LU, B, sizeof B);
+  if (lu_factor(LU, 4, piv, 1e-13))
+    return SS_ESINGULAR;
+  z0[0] = -qv[n][0];
+  z0[1] = -qv[n][1];
+  z0[2] = -qv[n][2];
+  z0[3] = p->V;
+  lu_solve(LU, 4, piv, z0);
+  F[0] = p->chi * (z0[1] - z0[0]) - (p->ur - p->us);
+  for (int k = 0; k + 1 < n; k++) {
+    double Z[4];
+    memcpy(Z, qv[k + 1], sizeof Z);
+    mat4_vec(P[k + 1], z0, Z, 1);
+    F[k + 1] = end_value(q, k, Z);
+  }
+  if (!J)
+    return SS_OK;
+  /* Derivatives of the prefix maps: d(P_{k+1}, q_{k+1})/dtau_j for j <= k. */
+  for (int j = 0; j < n; j++) {
+    double dP[16], dq[4], tmp[16], dz0[4];
+    /* dP_{j+1} = dA_j P_j, dq_{j+1} = dA_j q_j + dc_j */
+    double dPk[MAXP + 1][16], dqk[MAXP + 1][4];
+    mat4_mul(dA[j], P[j], dP);
+    memcpy(dq, dc[j], sizeof dq);
+    mat4_vec(dA[j], qv[j], dq, 1);
+    memcpy(dPk[j + 1], dP, sizeof dP);
+    memcpy(dqk[j + 1], dq, sizeof dq);
+    for (int k = j + 1; k < n; k++) {
+      mat4_mul(A[k], dPk[k], tmp);
+      memcpy(dPk[k + 1], tmp, sizeof tmp);
+      mat4_vec(A[k], dqk[k], dqk[k + 1], 0);
+    }
+    /* dz0 = B^-1 (-(dM z0 + dc)[0..2], 0) */
+    double r[4] = {0, 0, 0, 0};
+    mat4_vec(dPk[n], z0, r, 0);
+    for (int i = 0; i < 3; i++)
+      dz0[i] = -(r[i] + dqk[n][i]);
+    dz0[3] = 0;
+    lu_solve(LU, 4, piv, dz0);
+    J[j] = p->chi * (dz0[1] - dz0[0]);
+    for (int k = 0; k + 1 < n; k++) {
+      double dZ[4], gv[4];
+      mat4_vec(P[k + 1], dz0, dZ, 0);
+      if (j <= k) {
+        mat4_vec(dPk[k + 1], z0, dZ, 1);
+        for (int i = 0; i < 4; i++)
+          dZ[i] += dqk[k + 1][i];
+      }
+      end_grad(q, k, gv);
+      J[n * (k + 1) + j] =
+          gv[0] * dZ[0] + gv[1] * dZ[1] + gv[2] * dZ[2] + gv[3] * dZ[3];
+    }
+  }
+  return SS_OK;
+}
+
+/* GSL callbacks */
+typedef struct gsl_ctx {
+  const oeq *q;
+  int bad;
+} gsl_ctx;
+
+static int gf(const gsl_vector *x, void *vp, gsl_vector *f) {
+  gsl_ctx *g = vp;
+  double z0[4];
+  if (oeq_eval(g->q, x->data, z0, f->data, NULL)) {
+    g->bad = 1;
+    return GSL_EBADFUNC;
+  }
+  return GSL_SUCCESS;
+}
+
+static int gdf(const gsl_vector *x, void *vp, gsl_matrix *J) {
+  gsl_ctx *g = vp;
+  double z0[4], F[MAXP];
+  if (oeq_eval(g->q, x->data, z0, F, J->data)) {
+    g->bad = 1;
+    return GSL_EBADFUNC;
+  }
+  return GSL_SUCCESS;
+}
+
+static int gfdf(const gsl_vector *x, void *vp, gsl_vector *f, gsl_matrix *J) {
+  gsl_ctx *g = vp;
+  double z0[4];
+  if (oeq_eval(g->q, x->data, z0, f->data, J->data)) {
+    g->bad = 1;
+    return GSL_EBADFUNC;
+  }
+  return GSL_SUCCESS;
+}
+
+static double maxabs(const double *v, int n) {
+  double r = 0;
+  for (int i = 0; i < n; i++)
+    r = fmax(r, fabs(v[i]));
+  return r;
+}
+
+/* Solve the duration equations from tau (in place).  Returns SS_OK with
+ * z0, the residual and the iteration count, or a failure. */
+static int solve_durations(const oeq *q, double *tau, double z0[4],
+                           double *resid, int *iters) {
+  const int n = q->n;
+  const ss_params *p = &q->m->p;
+  double scale = fmax(p->V, p->ur);
+  double tolF = RESID_ULPS * DBL_EPSILON * scale;
+  gsl_ctx ctx = {q, 0};
+  gsl_multiroot_function_fdf fdf = {gf, gdf, gfdf, (size_t)n, &ctx};
+  gsl_vector_view xv = gsl_vector_view_array(tau, (size_t)n);
+  gsl_multiroot_fdfsolver *s =
+      gsl_multiroot_fdfsolver_alloc(gsl_multiroot_fdfsolver_hybridsj, (size_t)n);
+  int rc = SS_ENOCONV, it = 0, status;
+  double F[MAXP], J[MAXP * MAXP], x[MAXP];
+  if (!s)
+    return SS_ENOMEM;
+  if (gsl_multiroot_fdfsolver_set(s, &fdf, &xv.vector) != GSL_SUCCESS ||
+      ctx.bad) {
+    gsl_multiroot_fdfsolver_free(s);
+    return SS_ESINGULAR;
+  }
+  do {
+    it++;
+    status = gsl_multiroot_fdfsolver_iterate(s);
+    if (status != GSL_SUCCESS || ctx.bad)
+      break;
+    status = gsl_multiroot_test_residual(s->f, 1e3 * tolF);
+  } while (status == GSL_CONTINUE && it < MAX_SOLVER_ITERS);
+  memcpy(x, s->x->data, (size_t)n * sizeof *x);
+  gsl_multiroot_fdfsolver_free(s);
+  /* Polish: plain Newton steps while the residual falls. */
+  if (oeq_eval(q, x, z0, F, J))
+    return SS_ESINGULAR;
+  double r = maxabs(F, n);
+  for (int k = 0; k < 4 && r > tolF; k++) {
+    int piv[MAXP];
+    double step[MAXP], xn[MAXP], Fn[MAXP], Jn[MAXP * MAXP], zn[4];
+    if (lu_factor(J, n, piv, 1e-15))
+      break;
+    for (int i = 0; i < n; i++)
+      step[i] = -F[i];
+    lu_solve(J, n, piv, step);
+    for (int i = 0; i < n; i++)
+      xn[i] = x[i] + step[i];
+    if (oeq_eval(q, xn, zn, Fn, Jn))
+      break;
+    double rn = maxabs(Fn, n);
+    if (!(rn < r))
+      break;
+    memcpy(x, xn, (size_t)n * sizeof *x);
+    memcpy(F, Fn, (size_t)n * sizeof *F);
+    memcpy(J, Jn, (size_t)(n * n) * sizeof *J);
+    memcpy(z0, zn, 4 * sizeof *z0);
+    r = rn;
+    it++;
+  }
+  if (oeq_eval(q, x, z0, F, NULL))
+    return SS_ESINGULAR;
+  r = maxabs(F, n);
+  memcpy(tau, x, (size_t)n * sizeof *tau);
+  *resid = r;
+  *iters = it;
+  if (r <= 1e3 * tolF && isfinite(r))
+    rc = SS_OK;
+  return rc;
+}
+
+/* ---- feasibility and margins ------------------------------------------ */
+
+static void margin_set(ss_margin *mg, double v, int phase, double t) {
+  if (v < mg->value) {
+    mg->value = v;
+    mg->phase = phase;
+    mg->t = t;
+  }
+}
+
+/* The derivative of g as an ss_trig. */
+static void trig_deriv(const ss_trig *g, ss_trig *h) {
+  memset(h, 0, sizeof *h);
+  h->n = g->n;
+  h->c0 = g->c1;
+  for (int k = 0; k < g->n; k++) {
+    h->w[k] = g->w[k];
+    h->a[k] = g->w[k] * g->b[k];
+    h->b[k] = -g->w[k] * g->a[k];
+  }
+}
+
+/* The interior local maxima of g on (0, T): zeros of g' where it falls,
+ * located with the certified finder.  Calls back with each. */
+static void interior_maxima(const ss_trig *g, double T,
+                            void (*cb)(void *, double, double), void *ctx) {
+  ss_trig h, hn;
+  double t = 0;
+  trig_deriv(g, &h);
+  hn = h;
+  hn.c0 = -h.c0;
+  hn.c1 = -h.c1;
+  for (int k = 0; k < h.n; k++) {
+    hn.a[k] = -h.a[k];
+    hn.b[k] = -h.b[k];
+  }
+  for (int guard = 0; guard < 10000 && t < T; guard++) {
+    double v[1], r;
+    int dir;
+    (void)ss__trig_at_zero(&h, t, &dir);
+    ss_trig_eval(&h, t, 0, v);
+    /* g' < 0 (or leaving zero downward): the next zero of g' is a minimum of
+     * g; search -g' < 0 ... and the other way round. */
+    const ss_trig *f = dir < 0 ? &h : &hn;
+    int rc = ss_trig_first_root(f, t, T, &r);
+    if (rc != SS_OK && rc != SS_GRAZING)
+      break;
+    if (rc == SS_OK && f == &h && r < T * (1 - 1e-12)) {
+      /* g' rises through zero: a minimum of g; nothing to record */
+    } else if (rc == SS_OK && f == &hn && r > 0 && r < T * (1 - 1e-12)) {
+      double gv[1];
+      ss_trig_eval(g, r, 0, gv);
+      cb(ctx, r, gv[0]);
+    }
+    if (r <= t) {
+      /* at a zero of g' already: step past it */
+      r = t + 1e-9 * fmax(1.0, T);
+    }
+    t = r;
+  }
+}
+
+typedef struct max_ctx {
+  ss_margin *mg;
+  int phase;
+  double vmax;
+} max_ctx;
+
+static void record_max(void *vp, double t, double g) {
+  max_ctx *c = vp;
+  margin_set(c->mg, -g, c->phase, t);
+}
+
+static void check_fail(ss_diag *d, const char *fmt, int k, ss_mode m,
+                       double a, double b) {
+  char where[32];
+  snprintf(where, sizeof where, "phase %d (%s)", k, ss_mode_name(m));
+  ss__fail(d, SS_INFEASIBLE, where, a, fmt, k, ss_mode_name(m), a, b);
+}
+
+int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
+  const ss_params *p = &m->p;
+  const int n = o->n_phases;
+  ss_sim sim;
+  ss_margin *all[] = {&o->slip_below, &o->over_above, &o->stick_upper,
+                      &o->stick_lower, &o->switching};
+  if (n < 2 || n > MAXP)
+    return ss__fail(d, SS_EINVAL, "phases", n, "bad phase count");
+  for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
+    all[i]->value = INFINITY;
+    all[i]->phase = -1;
+    all[i]->t = 0;
+  }
+  o->transversal.value = INFINITY;
+  o->transversal.phase = -1;
+  o->period = 0;
+  o->n_turns = 0;
+  for (int k = 0; k < n; k++) {
+    if (!(o->durations[k] > 0))
+      return ss__fail(d, SS_INFEASIBLE, "durations", o->durations[k],
+                      "phase %d (%s) has a non-positive duration %.6g", k,
+                      ss_mode_name(o->modes[k]), o->durations[k]);
+    o->period += o->durations[k];
+    if (o->modes[k] == SS_MODE_STICK && (k + 1 == n ||
+                                         o->modes[k + 1] == SS_MODE_SLIP))
+      o->n_turns++;
+  }
+  ss_z_to_x(m, o->z0, o->x0);
+  if (ss_sim_init_mode(&sim, m, 0, o->x0, SS_MODE_SLIP, d))
+    return SS_EINVAL;
+  for (int k = 0; k < n; k++) {
+    double tau = o->durations[k], xs[4];
+    ss_mode mode = o->modes[k], want = k + 1 < n ? o->modes[k + 1]
+                                                 : SS_MODE_SLIP;
+    double slack = 1e-7 * (1 + tau);
+    ss_event ev;
+    memcpy(xs, sim.x, sizeof xs);
+    /* margins of this phase from its closed form */
+    ss_trig g;
+    max_ctx mc = {NULL, k, 0};
+    if (mode == SS_MODE_STICK) {
+      mc.mg = &o->stick_upper;
+      ss__switching(m, mode, 1, xs, &g);
+      interior_maxima(&g, tau, record_max, &mc);
+      ss__switching(m, mode, -1, xs, &g);
+      mc.mg = &o->stick_lower;
+      interior_maxima(&g, tau, record_max, &mc);
+      double v0[1], v1[1];
+      ss_trig_eval(&g, 0, 0, v0);
+      ss_trig_eval(&g, tau, 0, v1);
+      margin_set(&o->stick_lower, -v0[0], k, 0);
+      margin_set(&o->stick_lower, -v1[0], k, tau);
+    } else {
+      mc.mg = mode == SS_MODE_SLIP ? &o->slip_below : &o->over_above;
+      ss__switching(m, mode, 0, xs, &g);
+      interior_maxima(&g, tau, record_max, &mc);
+    }
+    {
+      /* slope of the switching function at the end: > 0 is a transversal
+       * crossing */
+      ss_trig ge;
+      double v[2];
+      ss__switching(m, mode,
+                    mode == SS_MODE_STICK ? (want == SS_MODE_OVERSHOOT ? -1 : 1)
+                                          : 0,
+                    xs, &ge);
+      ss_trig_eval(&ge, tau, 1, v);
+      margin_set(&o->transversal, v[1], k, tau);
+    }
+    /* the certified finder: the first event must be this phase's end */
+    int rc = ss_sim_next_event(&sim, ss_sim_time(&sim) + tau + slack, &ev);
+    double tloc = rc == SS_OK ? ev.t - (sim.t_hi + sim.t_lo - (ev.t - ev.t)) : 0;
+    (void)tloc;
+    if (rc == SS_HORIZON)
+      return ss__fail(d, SS_INFEASIBLE, "phases", tau,
+                      "phase %d (%s) does not end at its duration %.9g: its "
+                      "switching function does not reach zero",
+                      k, ss_mode_name(mode), tau);
+    if (rc)
+      return ss__fail(d, rc, "phases", tau, "event search failed");
+    double t_start = ev.t; /* recomputed below */
+    (void)t_start;
+    if (ev.kind == SS_EVENT_GRAZING) {
+      check_fail(d,
+                 "phase %d (%s) touches its switching surface tangentially at "
+                 "t = %.9g (duration %.9g): a grazing orbit",
+                 k, mode, ev.t, tau);
+      return SS_INFEASIBLE;
+    }
+    if (ev.from != mode)
+      return ss__fail(d, SS_EBUG, "phases", k, "mode mismatch");
+    /* compare the end time, measured from the start of the run */
+    double t_expect = 0;
+    for (int i = 0; i <= k; i++)
+      t_expect += o->durations[i];
+    if (ev.t < t_expect - slack * (k + 1)) {
+      check_fail(d,
+                 "phase %d (%s) ends early, at its first crossing t = %.9g "
+                 "instead of %.9g",
+                 k, mode, ev.t, t_expect);
+      return SS_INFEASIBLE;
+    }
+    /* the switching conditions at the end of the phase */
+    double f = ss_stick_force(m, ev.x);
+    if (mode == SS_MODE_SLIP) {
+      if (want == SS_MODE_OVERSHOOT)
+        margin_set(&o->switching, -p->ur - f, k, tau); /* (3.2) */
+      else
+        margin_set(&o->switching, f + p->ur, k, tau);
+    } else if (mode == SS_MODE_OVERSHOOT) {
+      if (want == SS_MODE_STICK)
+        margin_set(&o->switching, p->ur - f, k, tau); /* (3.4) */
+      else
+        margin_set(&o->switching, f - p->ur, k, tau);
+    }
+    if (ev.to != want) {
+      if (mode == SS_MODE_SLIP && want == SS_MODE_OVERSHOOT)
+        check_fail(d,
+                   "the solution violates (3.2) at the end of slip (phase %d, "
+                   "%s): chi(x2-x1) + ur = %.6g must be < 0 (margin %.3g)",
+                   k, mode, f + p->ur, -p->ur - f);
+      else
+        check_fail(d,
+                   "phase %d (%s) is followed by the wrong mode: chi(x2-x1) = "
+                   "%.9g at its end (margin %.3g)",
+                   k, mode, f, o->switching.value);
+      return SS_INFEASIBLE;
+    }
+  }
+  /* closure: back at the start? */
+  {
+    double ze[4];
+    ss_x_to_z(m, sim.x, ze);
+    o->closure = 0;
+    for (int i = 0; i < 4; i++)
+      o->closure = fmax(o->closure, fabs(ze[i] - o->z0[i]));
+  }
+  o->min_margin = o->switching;
+  for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+    if (all[i]->value < o->min_margin.value)
+      o->min_margin = *all[i];
+  return SS_OK;
+}
+
+int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
+                   const double *tau, int no_fd, ss_orbit *o, ss_diag *d) {
+  oeq q;
+  double x[MAXP], z0[4], resid;
+  int iters = 0, rc;
+  if (!m || !modes || !tau || !o)
+    return ss__fail(d, SS_EINVAL, "orbit", 0, "missing argument");
+  if (oeq_init(&q, m, n, modes))
+    return ss__fail(d, SS_EINVAL, "modes", n,
+                    "a phase sequence starts with slip, ends with stick, has "
+                    "at most %d phases and no mode twice in a row",
+                    MAXP);
+  for (int k = 0; k < n; k++) {
+    if (!isfinite(tau[k]) || !(tau[k] > 0))
+      return ss__fail(d, SS_EINVAL, "guess", tau[k],
+                      "guess duration %d must be finite and > 0", k);
+    x[k] = tau[k];
+  }
+  memset(o, 0, sizeof *o);
+  rc = solve_durations(&q, x, z0, &resid, &iters);
+  o->n_phases = n;
+  memcpy(o->modes, modes, (size_t)n * sizeof *modes);
+  memcpy(o->durations, x, (size_t)n * sizeof *x);
+  memcpy(o->z0, z0, sizeof z0);
+  o->residual = resid;
+  o->iterations = iters;
+  o->kind = ss_orbit_kind_of(n, modes);
+  if (rc)
+    return ss__fail(d, rc, "orbit", resid,
+                    "the orbit equations did not converge from this guess "
+                    "(residual %.3g after %d iterations)",
+                    resid, iters);
+  ss_z_to_x(m, z0, o->x0);
+  if ((rc = ss_orbit_check(m, o, d)))
+    return rc;
+  rc = ss_stability(m, n, o->modes, o->durations, o->z0, o->n_turns, no_fd,
+                    &o->stab);
+  if (rc == SS_ESINGULAR)
+    return ss__fail(d, SS_INFEASIBLE, "orbit", 0,
+                    "a phase of the orbit ends tangentially (grazing)");
+  return rc;
+}

@@ -1,0 +1,340 @@
+/*
+ * search.c: finding periodic orbits with no guess.
+ *
+ * Three sources of candidates, each refined by the duration equations of
+ * orbit.c and accepted only if ss_orbit_check() proves them feasible:
+ *  1. simulation: iterate the Poincare map from points of Sigma0 until it
+ *     repeats with some period k; this finds the stable orbits, of any phase
+ *     sequence;
+ *  2. a grid of durations for the overshoot (3 unknowns) and stick-slip (2)
+ *     equations; Newton does not care about stability, so this finds the
+ *     unstable orbits that simulation never reaches;
+ *  3. Newton on the fixed points of P^k from points of Sigma0, for unstable
+ *     orbits of other sequences and periods.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "internal.h"
+
+#define SS_TWO_PI 6.283185307179586476925287
+#define MAP_EVENTS 64     /* events allowed for one return to Sigma0 */
+#define SETTLE_TURNS 80   /* returns simulated from each starting point */
+#define MAP_NEWTON_ITERS 30
+
+typedef struct collect {
+  const ss_model *m;
+  ss_orbit *out;
+  int max, n;
+  double scale;
+  ss_orbit_report *rep;
+  int no_fd;
+  double t_start, budget;
+} collect;
+
+static int over_budget(const collect *c) {
+  return c->budget > 0 && ss__now() - c->t_start > c->budget;
+}
+
+/* Does orbit b pass through a's start with a's sequence rotated?  Compares
+ * a.z0 with b's state at each of its stick -> slip points. */
+static int same_orbit(const ss_model *m, const ss_orbit *a, const ss_orbit *b,
+                      double tol) {
+  if (a->n_phases != b->n_phases ||
+      fabs(a->period - b->period) > 1e-6 * (1 + a->period))
+    return 0;
+  int n = b->n_phases;
+  double x[4];
+  memcpy(x, b->x0, sizeof x);
+  for (int r = 0; r < n; r++) {
+    if (b->modes[r] == SS_MODE_SLIP &&
+        (r == 0 || b->modes[r - 1] == SS_MODE_STICK)) {
+      int seq_ok = 1;
+      for (int k = 0; k < n && seq_ok; k++)
+        seq_ok = a->modes[k] == b->modes[(k + r) % n] &&
+                 fabs(a->durations[k] - b->durations[(k + r) % n]) <
+                     1e-6 * (1 + a->period);
+      double z[4];
+      ss_x_to_z(m, x, z);
+      if (seq_ok && fabs(z[0] - a->z0[0]) < tol &&
+          fabs(z[2] - a->z0[2]) < tol)
+        return 1;
+    }
+    ss_flow(m, b->modes[r], b->durations[r], x, x);
+    x[3] = m->p.V;
+  }
+  return 0;
+}
+
+static void add_orbit(collect *c, const ss_orbit *o) {
+  for (int i = 0; i < c->n; i++)
+    if (same_orbit(c->m, o, &c->out[i], 1e-6 * c->scale)) {
+      c->rep->duplicates++;
+      return;
+    }
+  if (c->n < c->max)
+    c->out[c->n++] = *o;
+  else
+    c->rep->truncated++;
+}
+
+/* Refine a candidate sequence and durations; keep it if feasible. */
+static void try_solve(collect *c, int n, const ss_mode *modes,
+                      const double *tau, int source) {
+  ss_orbit o;
+  ss_diag d;
+  ss_diag_clear(&d);
+  c->rep->newton_starts++;
+  int rc = ss_orbit_solve(c->m, n, modes, tau, c->no_fd, &o, &d);
+  if (rc == SS_OK) {
+    c->rep->roots++;
+    o.source = source;
+    add_orbit(c, &o);
+  } else if (rc == SS_INFEASIBLE) {
+    c->rep->roots++;
+    c->rep->infeasible++;
+    if (!c->rep->reason[0])
+      snprintf(c->rep->reason, sizeof c->rep->reason, "%s orbit rejected: %s",
+               ss_orbit_kind_name(ss_orbit_kind_of(n, modes)), d.text);
+  }
+}
+
+/* Newton on P^k(s) = s with the analytic Jacobian of the travelled
+ * sequence.  On success, fills the sequence and returns 0. */
+static int map_newton(collect *c, double s[2], int k, ss_mode *modes,
+                      double *dur, int *np) {
+  const ss_params *p = &c->m->p;
+  for (int it = 0; it < MAP_NEWTON_ITERS; it++) {
+    double out[2], z0[4];
+    ss_stab st;
+    if (ss_poincare(c->m, s, k, (size_t)(MAP_EVENTS * k), out, modes, dur,
+                    np))
+      return -1;
+    double g0 = out[0] - s[0], g1 = out[1] - s[1];
+    if (fabs(g0) + fabs(g1) < 1e-12 * c->scale)
+      return 0;
+    z0[0] = s[0];
+    z0[1] = s[0] + (p->ur - p->us) / p->chi;
+    z0[2] = s[1];
+    z0[3] = p->V;
+    if (ss_stability(c->m, *np, modes, dur, z0, k, 1, &st))
+      return -1;
+    double a = st.jac[0][0] - 1, b = st.jac[0][1], cc = st.jac[1][0],
+           d = st.jac[1][1] - 1, det = a * d - b * cc;
+    if (!(fabs(det) > 1e-14))
+      return -1;
+    double d0 = (-g0 * d + g1 * b) / det, d1 = (-a * g1 + cc * g0) / det;
+    /* damp steps that leave the neighbourhood */
+    double lim = 0.5 * c->scale, len = fabs(d0) + fabs(d1);
+    if (len > lim) {
+      d0 *= lim / len;
+      d1 *= lim / len;
+    }
+    s[0] += d0;
+    s[1] += d1;
+  }
+  return -1;
+}
+
+/* Source 1: iterate P from a seed; if it settles with period k, refine. */
+static void from_simulation(collect *c, const double seed[2], int max_k) {
+  double pts[SETTLE_TURNS + 1][2];
+  int np = 0;
+  pts[0][0] = seed[0];
+  pts[0][1] = seed[1];
+  c->rep->simulations++;
+  for (int i = 0; i < SETTLE_TURNS; i++) {
+    if (ss_poincare(c->m, pts[i], 1, MAP_EVENTS, pts[i + 1], NULL, NULL, NULL))
+      break;
+    np = i + 1;
+  }
+  if (np < 2 * max_k + 1)
+    return;
+  for (int k = 1; k <= max_k; k++) {
+    double e = fabs(pts[np][0] - pts[np - k][0]) +
+               fabs(pts[np][1] - pts[np - k][1]);
+    if (e < 1e-3 * c->scale) {
+      double s[2] = {pts[np][0], pts[np][1]}, dur[SS_MAX_PHASES];
+      ss_mode modes[SS_MAX_PHASES];
+      int n;
+      c->rep->newton_starts++;
+      if (map_newton(c, s, k, modes, dur, &n) == 0)
+        try_solve(c, n, modes, dur, 1);
+      return;
+    }
+  }
+}
+
+int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
+                  int max_out, int *n_out, ss_orbit_report *rep, ss_diag *d) {
+  ss_orbit_opts def = {0};
+  ss_orbit_report rep_local;
+  const ss_params *p = &m->p;
+  collect c;
+  if (!opts)
+    opts = &def;
+  if (!rep)
+    rep = &rep_local;
+  memset(rep, 0, sizeof *rep);
+  if (!out || max_out < 0 || !n_out)
+    return ss__fail(d, SS_EINVAL, "orbits", 0, "missing output");
+  unsigned kinds = opts->kinds ? opts->kinds : SS_ORBIT_ALL;
+  int effort = opts->effort ? opts->effort : 2;
+  int max_k = opts->max_period ? opts->max_period : 4;
+  if (effort < 1 || effort > 3)
+    return ss__fail(d, SS_EINVAL, "effort", effort, "effort is 1, 2 or 3");
+  if (max_k < 1 || max_k > 8)
+    return ss__fail(d, SS_EINVAL, "max_period", max_k,
+                    "max_period is between 1 and 8");
+  c.m = m;
+  c.out = out;
+  c.max = max_out;
+  c.n = 0;
+  c.scale = fmax(p->V, (p->ur - p->us) / p->chi);
+  c.rep = rep;
+  c.no_fd = opts->no_fd;
+  c.t_start = ss__now();
+  c.budget = opts->max_seconds;
+  *n_out = 0;
+
+  if (opts->n_guess > 0) {
+    ss_mode modes[SS_MAX_PHASES];
+    int n = opts->n_guess;
+    if (n > SS_MAX_PHASES)
+      return ss__fail(d, SS_EINVAL, "guess", n, "too many phases");
+    memcpy(modes, opts->guess_modes, sizeof modes);
+    if (modes[0] != SS_MODE_SLIP || modes[n - 1] != SS_MODE_STICK) {
+      /* default sequences by length */
+      ss_mode ov[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
+      ss_mode ss[2] = {SS_MODE_SLIP, SS_MODE_STICK};
+      if (n == 3)
+        memcpy(modes, ov, sizeof ov);
+      else if (n == 2)
+        memcpy(modes, ss, sizeof ss);
+      else
+        return ss__fail(d, SS_EINVAL, "guess", n,
+                        "give the modes of a guess with more than 3 phases");
+    }
+    ss_diag dd;
+    ss_orbit o;
+    ss_diag_clear(&dd);
+    rep->newton_starts = 1;
+    int rc = ss_orbit_solve(m, n, modes, opts->guess, opts->no_fd, &o, &dd);
+    if (rc == SS_OK) {
+      rep->roots = 1;
+      o.source = 0;
+      add_orbit(&c, &o);
+    } else {
+      if (rc == SS_INFEASIBLE) {
+        rep->roots = 1;
+        rep->infeasible = 1;
+      }
+      snprintf(rep->reason, sizeof rep->reason, "%s", dd.text);
+      if (rc != SS_INFEASIBLE && rc != SS_ENOCONV && rc != SS_ESINGULAR)
+        return ss__fail(d, rc, dd.where, dd.value, "%s", dd.text);
+    }
+    *n_out = c.n;
+    return SS_OK;
+  }
+
+  /* seeds on Sigma0 */
+  double L = (p->ur - p->us) / p->chi, V = p->V;
+  double seeds[20][2];
+  int ns = 0;
+  {
+    const double z1f[] = {0, 0.5, -0.5, 1.0, -1.0};
+    const double vf[] = {-0.8, 0.0, 0.8, -1.6};
+    int nz = effort == 1 ? 2 : effort == 2 ? 3 : 5;
+    int nv = effort == 1 ? 1 : effort == 2 ? 2 : 4;
+    for (int i = 0; i < nz; i++)
+      for (int j = 0; j < nv; j++) {
+        seeds[ns][0] = z1f[i] * L;
+        seeds[ns][1] = vf[j] * V;
+        ns++;
+      }
+  }
+  /* 1. simulation to attractors */
+  for (int i = 0; i < ns && !over_budget(&c); i++)
+    from_simulation(&c, seeds[i], max_k);
+
+  /* 2. duration grids; the slow modal period sets the scale */
+  double T0 = SS_TWO_PI / m->w[0];
+  if ((kinds & SS_ORBIT_OVERSHOOT) && !over_budget(&c)) {
+    const double ft[] = {0.5, 0.3, 0.7, 0.9};
+    const double ft1[] = {0.3, 0.15, 0.5};
+    const double ft2[] = {0.5, 0.25, 0.75};
+    int a = effort == 1 ? 2 : effort == 2 ? 3 : 4, b = effort == 1 ? 2 : 3;
+    ss_mode modes[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
+    for (int i = 0; i < a; i++)
+      for (int j = 0; j < b; j++)
+        for (int k = 0; k < b && !over_budget(&c); k++) {
+          double tau[3] = {ft[i] * T0, ft1[j] * T0, ft2[k] * SS_TWO_PI};
+          try_solve(&c, 3, modes, tau, 2);
+        }
+  }
+  if ((kinds & SS_ORBIT_STICKSLIP) && !over_budget(&c)) {
+    const double ft[] = {0.5, 0.3, 0.7, 0.9, 1.1};
+    const double ft2[] = {0.5, 0.25, 0.75, 1.0};
+    int a = effort == 1 ? 2 : effort == 2 ? 4 : 5, b = effort == 1 ? 2 : 4;
+    ss_mode modes[2] = {SS_MODE_SLIP, SS_MODE_STICK};
+    for (int i = 0; i < a; i++)
+      for (int k = 0; k < b && !over_budget(&c); k++) {
+        double tau[2] = {ft[i] * T0, ft2[k] * SS_TWO_PI};
+        try_solve(&c, 2, modes, tau, 2);
+      }
+  }
+  /* 3. Newton on P^k from the seeds */
+  if ((kinds & SS_ORBIT_OTHER) && effort >= 2) {
+    int kmax = effort == 2 ? (max_k < 2 ? max_k : 2) : max_k;
+    for (int k = 1; k <= kmax; k++)
+      for (int i = 0; i < ns && !over_budget(&c); i++) {
+        double s[2] = {seeds[i][0], seeds[i][1]}, dur[SS_MAX_PHASES];
+        ss_mode modes[SS_MAX_PHASES];
+        int n;
+        c.rep->newton_starts++;
+        if (map_newton(&c, s, k, modes, dur, &n) == 0) {
+          /* a fixed point of P^k that is one of P^j, j | k, is not new */
+          double o1[2];
+          int minimal = 1;
+          for (int j = 1; j < k && minimal; j++)
+            if (k % j == 0 &&
+                ss_poincare(m, s, j, MAP_EVENTS * (size_t)j, o1, NULL, NULL,
+                            NULL) == 0 &&
+                fabs(o1[0] - s[0]) + fabs(o1[1] - s[1]) < 1e-8 * c.scale)
+              minimal = 0;
+          if (minimal)
+            try_solve(&c, n, modes, dur, 3);
+        }
+      }
+  }
+  /* keep only the kinds asked for */
+  int w = 0;
+  for (int i = 0; i < c.n; i++)
+    if (kinds & c.out[i].kind)
+      c.out[w++] = c.out[i];
+  c.n = w;
+  /* sort: kind, then period */
+  for (int i = 1; i < c.n; i++)
+    for (int j = i; j > 0; j--) {
+      ss_orbit *a = &c.out[j - 1], *b = &c.out[j];
+      if (a->kind > b->kind || (a->kind == b->kind && a->period > b->period)) {
+        ss_orbit t = *a;
+        *a = *b;
+        *b = t;
+      }
+    }
+  *n_out = c.n;
+  if (c.n == 0 && !rep->reason[0])
+    snprintf(rep->reason, sizeof rep->reason,
+             "no periodic orbit found: %d Newton starts gave %d roots, none "
+             "feasible; %d simulations did not settle on a periodic motion",
+             rep->newton_starts, rep->roots, rep->simulations);
+  if (over_budget(&c))
+    return ss__fail(d, SS_ELIMIT_TIME, "max_seconds", c.budget,
+                    "the orbit search ran out of its %g s budget after "
+                    "finding %d orbits",
+                    c.budget, c.n);
+  return SS_OK;
+}
