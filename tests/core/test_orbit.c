@@ -1,0 +1,204 @@
+/*
+ * test_orbit.c: periodic orbits and their stability, each verified by
+ * simulation (the certified event-driven one and the rk8pd reference) and
+ * by finite differences of the simulated Poincare map.
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include <gsl/gsl_errno.h>
+
+#include "refsim.h"
+#include "stickslip.h"
+#include "test.h"
+
+#define MAXO 32
+
+/* The orbit must close under the independent rk8pd reference: one period
+ * from x0 returns to x0, through the same phases. */
+static double ref_closure(const ss_model *m, const ss_orbit *o) {
+  ref_params rp = {m->p.chi, m->p.eta, m->p.us, m->p.ur, m->p.V};
+  ref_opts ro = {gsl_odeiv2_step_rk8pd, 1e-13, 1e-13, 0, 1e-13};
+  ref_event ev[64];
+  double xe[4];
+  int me;
+  long n = ref_simulate(&rp, 0, o->x0, REF_SLIP, o->period, &ro, ev, 64, xe,
+                        &me);
+  /* the last event is the return to Sigma0, at the period (up to the
+   * reference's accuracy it may fall just before or after t = period) */
+  double err = 0, t = 0;
+  for (long i = 0; i < n && i < o->n_phases; i++) {
+    t += o->durations[i];
+    if (ev[i].from != (int)o->modes[i])
+      return INFINITY;
+    err = fmax(err, fabs(ev[i].t - t));
+  }
+  for (int i = 0; i < 4; i++)
+    err = fmax(err, fabs(xe[i] - o->x0[i]));
+  return err;
+}
+
+static void verify(const ss_model *m, const ss_orbit *o, const char *what) {
+  double rc = ref_closure(m, o);
+  printf("%s: %s orbit, %d phases, %d turns, period %.12g, rho %.6g, closure "
+         "%.2g, rk8pd %.2g, |J - J_fd| %.2g, min margin %.3g\n",
+         what, ss_orbit_kind_name(o->kind), o->n_phases, o->n_turns, o->period,
+         o->stab.spectral_radius, o->closure, rc, o->stab.jac_diff,
+         o->min_margin.value);
+  ASSERT_TRUE(o->closure < 1e-12);
+  ASSERT_TRUE(rc < 1e-7);
+  ASSERT_TRUE(o->stab.jac_diff < 1e-6);
+  ASSERT_TRUE(o->min_margin.value >= 0);
+  ASSERT_TRUE(o->residual < 1e-12);
+}
+
+/* EVIDENCE: issue 3 "The paper's data set: the overshoot orbit is found with
+ * no guess. Durations, z0 and eigenvalues agree with the paper to its
+ * printed precision" */
+static void test_paper(void) {
+  ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
+  ss_model m;
+  ss_model_init(&m, &p, NULL);
+  ss_orbit out[MAXO];
+  int n = 0;
+  ss_orbit_report rep;
+  ss_orbit_opts o = {0};
+  ASSERT_EQ_INT(ss_orbit_find(&m, &o, out, MAXO, &n, &rep, NULL), SS_OK);
+  const ss_orbit *ov = NULL;
+  for (int i = 0; i < n; i++)
+    if (out[i].kind == SS_ORBIT_OVERSHOOT)
+      ov = &out[i];
+  ASSERT_TRUE(ov != NULL);
+  if (!ov)
+    return;
+  verify(&m, ov, "paper");
+  ASSERT_NEAR(ov->durations[0], 4.5, 0.005);
+  ASSERT_NEAR(ov->durations[1], 2.717, 0.01);
+  ASSERT_NEAR(ov->durations[2], 3.0536, 0.005);
+  ASSERT_NEAR(ov->z0[0], 1.1844, 0.0015);
+  ASSERT_NEAR(ov->z0[1], 3.9116, 0.0015);
+  ASSERT_NEAR(ov->z0[2], -0.8075, 0.0005);
+  /* the paper prints 0.1705 +- 0.0821i; see README for the difference */
+  ASSERT_NEAR(ov->stab.eig_re[0], 0.1705, 0.002);
+  ASSERT_NEAR(fabs(ov->stab.eig_im[0]), 0.0821, 0.012);
+  ASSERT_TRUE(ov->stab.stable);
+  /* EVIDENCE: issue 5 "an orbit whose constraint margin is below 1e-3 (the
+   * paper's own case is one)": (3.2) at the end of slip */
+  ASSERT_TRUE(ov->switching.value > 0 && ov->switching.value < 1e-3);
+  ASSERT_EQ_INT(ov->switching.phase, 0);
+  printf("paper orbit: tau %.10f tau1 %.10f tau2 %.10f z0 %.10f %.10f %.10f "
+         "eig %.6f +- %.6fi, (3.2) margin %.3g\n",
+         ov->durations[0], ov->durations[1], ov->durations[2], ov->z0[0],
+         ov->z0[1], ov->z0[2], ov->stab.eig_re[0], fabs(ov->stab.eig_im[0]),
+         ov->switching.value);
+  printf("search: %d simulations, %d Newton starts, %d roots, %d infeasible, "
+         "%d duplicates\n",
+         rep.simulations, rep.newton_starts, rep.roots, rep.infeasible,
+         rep.duplicates);
+
+  /* from the paper's printed durations as a guess: the same orbit */
+  ss_orbit g;
+  ss_mode modes[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
+  double tau[3] = {4.5, 2.717, 3.0536};
+  ASSERT_EQ_INT(ss_orbit_solve(&m, 3, modes, tau, 0, &g, NULL), SS_OK);
+  for (int k = 0; k < 3; k++)
+    ASSERT_NEAR(g.durations[k], ov->durations[k], 1e-12);
+  ASSERT_TRUE(g.iterations <= 10);
+  /* the stability function on the returned orbit agrees */
+  ss_stab st;
+  ASSERT_EQ_INT(ss_stability(&m, 3, ov->modes, ov->durations, ov->z0, 1, 0,
+                             &st),
+                SS_OK);
+  ASSERT_NEAR(st.spectral_radius, ov->stab.spectral_radius, 1e-14);
+  ASSERT_TRUE(st.jac_diff < 1e-6);
+}
+
+/* EVIDENCE: issue 3 "A parameter set where the overshoot equations have a
+ * root that violates (3.2): no overshoot orbit is returned, and the reason
+ * is" */
+static void test_violates_32(void) {
+  ss_params p = {0.2, 4.0, 0.0724, 0.4, 1.0};
+  ss_model m;
+  ss_model_init(&m, &p, NULL);
+  ss_orbit out[MAXO];
+  int n = -1;
+  ss_orbit_report rep;
+  ss_orbit_opts o = {0};
+  o.kinds = SS_ORBIT_OVERSHOOT;
+  ASSERT_EQ_INT(ss_orbit_find(&m, &o, out, MAXO, &n, &rep, NULL), SS_OK);
+  ASSERT_EQ_INT(n, 0);
+  ASSERT_TRUE(strstr(rep.reason, "(3.2)") != NULL);
+  printf("ur = 0.4: %s\n", rep.reason);
+  /* the same from a guess */
+  ss_mode modes[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
+  double tau[3] = {4.5, 2.7, 3.0};
+  ss_orbit g;
+  ss_diag d;
+  ss_diag_clear(&d);
+  int rc = ss_orbit_solve(&m, 3, modes, tau, 1, &g, &d);
+  ASSERT_EQ_INT(rc, SS_INFEASIBLE);
+  ASSERT_TRUE(strstr(d.text, "(3.2)") != NULL);
+}
+
+/* EVIDENCE: issue 3 "Orbits for at least five other parameter sets,
+ * including a classical stick-slip orbit, an unstable orbit and a period-2
+ * orbit, each verified by simulation" */
+static void test_other_sets(void) {
+  const ss_params sets[] = {
+      {0.2, 4.0, 0.0724, 0.4, 1.0}, {0.5, 1.0, 0.1, 0.5, 1.0},
+      {0.3, 2.0, 0.05, 0.9, 1.0},   {0.1, 10.0, 0.05, 0.6, 1.0},
+      {0.2, 4.0, 0.0724, 1.2, 1.0}, {0.2, 4.0, 0.1, 0.6178, 1.0},
+  };
+  int stable_ss = 0, unstable = 0, period2 = 0, sets_with = 0, total = 0;
+  for (size_t s = 0; s < sizeof sets / sizeof sets[0]; s++) {
+    ss_model m;
+    ss_model_init(&m, &sets[s], NULL);
+    ss_orbit out[MAXO];
+    int n = 0;
+    ss_orbit_opts o = {0};
+    ASSERT_EQ_INT(ss_orbit_find(&m, &o, out, MAXO, &n, NULL, NULL), SS_OK);
+    char what[64];
+    snprintf(what, sizeof what, "set %zu", s);
+    for (int i = 0; i < n; i++) {
+      verify(&m, &out[i], what);
+      stable_ss += out[i].kind == SS_ORBIT_STICKSLIP && out[i].stab.stable;
+      unstable += !out[i].stab.stable;
+      period2 += out[i].n_turns == 2;
+    }
+    sets_with += n > 0;
+    total += n;
+  }
+  ASSERT_TRUE(sets_with >= 5);
+  ASSERT_TRUE(stable_ss >= 1);
+  ASSERT_TRUE(unstable >= 1);
+  ASSERT_TRUE(period2 >= 1);
+  printf("other sets: %d orbits, %d stable stick-slip, %d unstable, %d "
+         "period-2\n",
+         total, stable_ss, unstable, period2);
+}
+
+/* Bad input is refused with a reason. */
+static void test_bad_input(void) {
+  ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
+  ss_model m;
+  ss_model_init(&m, &p, NULL);
+  ss_orbit g;
+  ss_diag d;
+  ss_mode bad[3] = {SS_MODE_STICK, SS_MODE_SLIP, SS_MODE_STICK};
+  double tau[3] = {1, 1, 1}, neg[3] = {1, -1, 1};
+  ss_mode modes[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
+  ss_diag_clear(&d);
+  ASSERT_EQ_INT(ss_orbit_solve(&m, 3, bad, tau, 1, &g, &d), SS_EINVAL);
+  ss_diag_clear(&d);
+  ASSERT_EQ_INT(ss_orbit_solve(&m, 3, modes, neg, 1, &g, &d), SS_EINVAL);
+  ASSERT_TRUE(strcmp(d.where, "guess") == 0);
+}
+
+int main(void) {
+  gsl_set_error_handler_off();
+  test_paper();
+  test_violates_32();
+  test_other_sets();
+  test_bad_input();
+  TEST_DONE();
+}
