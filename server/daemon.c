@@ -1,0 +1,434 @@
+/*
+ * daemon.c: routing, body accumulation, admission control, logging.
+ *
+ * Threading: libmicrohttpd's thread-per-connection mode, the one mode in
+ * which a callback may block; so a long computation holds only its own
+ * connection's thread and a short request (/health) never waits behind it.
+ * Computations are admitted through a counting semaphore of cfg->workers
+ * slots; a request that cannot get a slot within cfg->queue_timeout is
+ * answered 503 with Retry-After.  Each connection is bounded in memory
+ * (MHD_OPTION_CONNECTION_MEMORY_LIMIT) and in idle time; bodies are bounded
+ * by cfg->lim.max_body, refused with 413 from Content-Length when possible.
+ */
+#define _GNU_SOURCE
+#include <arpa/inet.h>
+#include <errno.h>
+#include <math.h>
+#include <netinet/in.h>
+#include <semaphore.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <gsl/gsl_version.h>
+#include <jansson.h>
+#include <microhttpd.h>
+
+#include "server.h"
+
+/* A body that trickles in for longer than this is dropped (slow loris). */
+#define BODY_SECONDS 10.0
+
+struct srv_daemon {
+  struct MHD_Daemon *mhd;
+  srv_config cfg;
+  sem_t slots;
+  srv_metrics metrics;
+  atomic_int draining;
+  double started;
+};
+
+typedef struct req {
+  int ep;
+  int is_post;
+  int status;
+  int done; /* a response was queued */
+  char *buf;
+  size_t len, cap;
+  int too_big;
+  double t0;
+  char method[8];
+  char path[96];
+} req;
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static enum MHD_Result send_body(struct MHD_Connection *c, req *r, int status,
+                                 char *body, size_t len, const char *ctype,
+                                 int must_free, int retry_after,
+                                 const char *allow, int close) {
+  struct MHD_Response *resp = MHD_create_response_from_buffer(
+      len, body, must_free ? MHD_RESPMEM_MUST_FREE : MHD_RESPMEM_PERSISTENT);
+  enum MHD_Result ok;
+  if (!resp) {
+    if (must_free)
+      free(body);
+    return MHD_NO;
+  }
+  MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
+  MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+  if (retry_after)
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "1");
+  if (allow)
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, allow);
+  if (close)
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close");
+  ok = MHD_queue_response(c, (unsigned)status, resp);
+  MHD_destroy_response(resp);
+  r->status = status;
+  r->done = 1;
+  return ok;
+}
+
+static enum MHD_Result send_api(struct MHD_Connection *c, req *r,
+                                api_response *ar, int retry_after,
+                                const char *allow, int close) {
+  enum MHD_Result ok = send_body(c, r, ar->status, ar->body, ar->len,
+                                 ar->content_type, 1, retry_after, allow,
+                                 close);
+  ar->body = NULL;
+  return ok;
+}
+
+static enum MHD_Result send_problem(struct MHD_Connection *c, req *r,
+                                    int status, const char *type,
+                                    const char *detail, const char *limit,
+                                    double limit_value, const char *allow) {
+  api_response ar;
+  api_problem(&ar, status, type, NULL, detail, NULL, limit, limit_value);
+  return send_api(c, r, &ar, status == 503, allow, status == 413 ||
+                                                      status == 503);
+}
+
+static enum MHD_Result send_json(struct MHD_Connection *c, req *r, json_t *o) {
+  char *s = json_dumps(o, JSON_COMPACT | JSON_REAL_PRECISION(17));
+  json_decref(o);
+  if (!s)
+    return send_problem(c, r, 500, "internal", "out of memory", NULL, 0, NULL);
+  return send_body(c, r, 200, s, strlen(s), "application/json", 1, 0, NULL, 0);
+}
+
+typedef struct route {
+  const char *path;
+  const char *method;
+  int ep;
+} route;
+
+static const route ROUTES[] = {
+    {"/orbit", "POST", SRV_EP_ORBIT},
+    {"/simulate", "POST", SRV_EP_SIMULATE},
+    {"/stability", "POST", SRV_EP_STABILITY},
+    {"/health", "GET", SRV_EP_HEALTH},
+    {"/version", "GET", SRV_EP_VERSION},
+    {"/openapi.json", "GET", SRV_EP_OPENAPI},
+    {"/metrics", "GET", SRV_EP_METRICS},
+};
+
+static enum MHD_Result serve_get(struct srv_daemon *d,
+                                 struct MHD_Connection *c, req *r) {
+  json_t *o;
+  switch (r->ep) {
+  case SRV_EP_HEALTH:
+    o = json_object();
+    json_object_set_new(o, "status", json_string("ok"));
+    json_object_set_new(o, "version", json_string(api_version()));
+    json_object_set_new(o, "uptime_seconds", json_real(now() - d->started));
+    json_object_set_new(o, "in_flight",
+                        json_integer(atomic_load(&d->metrics.in_flight)));
+    return send_json(c, r, o);
+  case SRV_EP_VERSION:
+    o = json_object();
+    json_object_set_new(o, "service", json_string("stickslipd"));
+    json_object_set_new(o, "version", json_string(api_version()));
+    json_object_set_new(o, "gsl", json_string(GSL_VERSION));
+    json_object_set_new(o, "jansson", json_string(JANSSON_VERSION));
+    json_object_set_new(o, "microhttpd", json_string(MHD_get_version()));
+    return send_json(c, r, o);
+  case SRV_EP_OPENAPI: {
+    const char *s = api_openapi_json();
+    return send_body(c, r, 200, (char *)s, strlen(s), "application/json", 0, 0,
+                     NULL, 0);
+  }
+  case SRV_EP_METRICS: {
+    char *s = srv_metrics_render(&d->metrics);
+    if (!s)
+      return send_problem(c, r, 500, "internal", "out of memory", NULL, 0,
+                          NULL);
+    return send_body(c, r, 200, s, strlen(s),
+                     "text/plain; version=0.0.4; charset=utf-8", 1, 0, NULL,
+                     0);
+  }
+  }
+  return send_problem(c, r, 404, "not-found", "no such resource", NULL, 0,
+                      NULL);
+}
+
+static int is_json_type(const char *ct) {
+  if (!ct)
+    return 0;
+  while (*ct == ' ')
+    ct++;
+  size_t n = strlen("application/json");
+  return strncasecmp(ct, "application/json", n) == 0 &&
+         (ct[n] == 0 || ct[n] == ';' || ct[n] == ' ');
+}
+
+static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
+                               req *r) {
+  struct timespec dl;
+  api_response ar;
+  clock_gettime(CLOCK_REALTIME, &dl);
+  double w = d->cfg.queue_timeout;
+  dl.tv_sec += (time_t)w;
+  dl.tv_nsec += (long)((w - floor(w)) * 1e9);
+  if (dl.tv_nsec >= 1000000000L) {
+    dl.tv_sec++;
+    dl.tv_nsec -= 1000000000L;
+  }
+  int got;
+  while ((got = sem_timedwait(&d->slots, &dl)) != 0 && errno == EINTR)
+    ;
+  if (got != 0) {
+    atomic_fetch_add(&d->metrics.rejected_busy, 1);
+    return send_problem(c, r, 503, "overloaded",
+                        "every compute slot stayed busy; retry after a second",
+                        NULL, 0, NULL);
+  }
+  api_endpoint ep = r->ep == SRV_EP_ORBIT      ? API_ORBIT
+                    : r->ep == SRV_EP_SIMULATE ? API_SIMULATE
+                                               : API_STABILITY;
+  api_handle(ep, r->buf ? r->buf : "", r->len, &d->cfg.lim, &ar);
+  sem_post(&d->slots);
+  if (ar.status >= 500)
+    fprintf(stderr, "stickslipd: %s %s answered %d: %.200s\n", r->method,
+            r->path, ar.status, ar.body ? ar.body : "");
+  return send_api(c, r, &ar, 0, NULL, 0);
+}
+
+static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
+                               const char *url, const char *method,
+                               const char *version, const char *upload_data,
+                               size_t *upload_data_size, void **con_cls) {
+  struct srv_daemon *d = cls;
+  req *r = *con_cls;
+  (void)version;
+  if (!r) {
+    r = calloc(1, sizeof *r);
+    if (!r)
+      return MHD_NO;
+    *con_cls = r;
+    r->t0 = now();
+    r->ep = SRV_EP_OTHER;
+    snprintf(r->method, sizeof r->method, "%s", method);
+    snprintf(r->path, sizeof r->path, "%s", url);
+    atomic_fetch_add(&d->metrics.in_flight, 1);
+    if (atomic_load(&d->draining))
+      return send_problem(c, r, 503, "shutting-down",
+                          "the server is shutting down", NULL, 0, NULL);
+    const route *rt = NULL;
+    int path_known = 0;
+    for (size_t i = 0; i < sizeof ROUTES / sizeof ROUTES[0]; i++)
+      if (strcmp(url, ROUTES[i].path) == 0) {
+        path_known = 1;
+        r->ep = ROUTES[i].ep;
+        if (strcmp(method, ROUTES[i].method) == 0 ||
+            (strcmp(method, "HEAD") == 0 &&
+             strcmp(ROUTES[i].method, "GET") == 0))
+          rt = &ROUTES[i];
+        else
+          rt = NULL;
+        if (!rt) {
+          char detail[96];
+          snprintf(detail, sizeof detail, "%s takes %s", ROUTES[i].path,
+                   ROUTES[i].method);
+          return send_problem(c, r, 405, "method-not-allowed", detail, NULL,
+                              0, ROUTES[i].method);
+        }
+        break;
+      }
+    if (!path_known)
+      return send_problem(c, r, 404, "not-found",
+                          "no such resource; see /openapi.json", NULL, 0,
+                          NULL);
+    if (strcmp(rt->method, "GET") == 0)
+      return serve_get(d, c, r);
+    r->is_post = 1;
+    const char *ct =
+        MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Type");
+    if (!is_json_type(ct))
+      return send_problem(c, r, 415, "unsupported-media-type",
+                          "send the body as Content-Type: application/json",
+                          NULL, 0, NULL);
+    const char *cl =
+        MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Length");
+    if (cl) {
+      char *end;
+      errno = 0;
+      unsigned long long n = strtoull(cl, &end, 10);
+      if (errno == ERANGE || n > d->cfg.lim.max_body) {
+        char detail[128];
+        snprintf(detail, sizeof detail,
+                 "the body is over the limit of %zu bytes", d->cfg.lim.max_body);
+        return send_problem(c, r, 413, "limit-exceeded", detail, "max_body",
+                            (double)d->cfg.lim.max_body, NULL);
+      }
+    }
+    return MHD_YES;
+  }
+  if (r->done) {
+    /* an early response is queued: discard whatever body still comes */
+    *upload_data_size = 0;
+    return MHD_YES;
+  }
+  if (*upload_data_size) {
+    size_t n = *upload_data_size;
+    *upload_data_size = 0;
+    if (now() - r->t0 > BODY_SECONDS)
+      return MHD_NO;
+    if (r->too_big || r->len + n > d->cfg.lim.max_body) {
+      r->too_big = 1;
+      return MHD_YES;
+    }
+    if (r->len + n + 1 > r->cap) {
+      size_t cap = r->cap ? r->cap : 4096;
+      while (cap < r->len + n + 1)
+        cap *= 2;
+      char *b = realloc(r->buf, cap);
+      if (!b)
+        return MHD_NO;
+      r->buf = b;
+      r->cap = cap;
+    }
+    memcpy(r->buf + r->len, upload_data, n);
+    r->len += n;
+    r->buf[r->len] = 0;
+    return MHD_YES;
+  }
+  if (r->too_big) {
+    char detail[128];
+    snprintf(detail, sizeof detail, "the body is over the limit of %zu bytes",
+             d->cfg.lim.max_body);
+    return send_problem(c, r, 413, "limit-exceeded", detail, "max_body",
+                        (double)d->cfg.lim.max_body, NULL);
+  }
+  return compute(d, c, r);
+}
+
+static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
+                      enum MHD_RequestTerminationCode toe) {
+  struct srv_daemon *d = cls;
+  req *r = *con_cls;
+  (void)c;
+  if (!r)
+    return;
+  double dt = now() - r->t0;
+  int status = r->done ? r->status : 499; /* 499: client went away */
+  (void)toe;
+  srv_metrics_observe(&d->metrics, r->ep, status, dt);
+  atomic_fetch_sub(&d->metrics.in_flight, 1);
+  if (!d->cfg.quiet)
+    fprintf(stderr, "%s %s %d %ld\n", r->method, r->path, status,
+            (long)(dt * 1e6));
+  free(r->buf);
+  free(r);
+  *con_cls = NULL;
+}
+
+struct srv_daemon *srv_start(const srv_config *cfg) {
+  struct srv_daemon *d = calloc(1, sizeof *d);
+  struct sockaddr_storage ss;
+  socklen_t sl;
+  unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD |
+                   MHD_USE_THREAD_PER_CONNECTION | MHD_USE_AUTO | MHD_USE_ITC |
+                   MHD_USE_ERROR_LOG;
+  if (!d)
+    return NULL;
+  d->cfg = *cfg;
+  d->started = now();
+  memset(&ss, 0, sizeof ss);
+  if (strchr(cfg->bind, ':')) {
+    struct sockaddr_in6 *a = (struct sockaddr_in6 *)&ss;
+    a->sin6_family = AF_INET6;
+    a->sin6_port = htons((uint16_t)cfg->port);
+    if (inet_pton(AF_INET6, cfg->bind, &a->sin6_addr) != 1)
+      goto bad_addr;
+    flags |= MHD_USE_IPv6;
+    sl = sizeof *a;
+  } else {
+    struct sockaddr_in *a = (struct sockaddr_in *)&ss;
+    a->sin_family = AF_INET;
+    a->sin_port = htons((uint16_t)cfg->port);
+    if (inet_pton(AF_INET, cfg->bind, &a->sin_addr) != 1)
+      goto bad_addr;
+    sl = sizeof *a;
+  }
+  (void)sl;
+  if (sem_init(&d->slots, 0, cfg->workers) != 0) {
+    free(d);
+    return NULL;
+  }
+  d->mhd = MHD_start_daemon(
+      flags, (uint16_t)cfg->port, NULL, NULL, handler, d,
+      MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
+      MHD_OPTION_CONNECTION_LIMIT, cfg->max_conn,
+      MHD_OPTION_PER_IP_CONNECTION_LIMIT, cfg->per_ip,
+      MHD_OPTION_CONNECTION_TIMEOUT, cfg->timeout,
+      MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)65536,
+      MHD_OPTION_STRICT_FOR_CLIENT, (int)1, MHD_OPTION_NOTIFY_COMPLETED,
+      completed, d, MHD_OPTION_END);
+  if (!d->mhd) {
+    fprintf(stderr, "stickslipd: cannot listen on %s port %d: %s\n",
+            cfg->bind, cfg->port, strerror(errno));
+    sem_destroy(&d->slots);
+    free(d);
+    return NULL;
+  }
+  const union MHD_DaemonInfo *info =
+      MHD_get_daemon_info(d->mhd, MHD_DAEMON_INFO_LISTEN_FD);
+  int port = cfg->port;
+  if (info) {
+    struct sockaddr_storage got;
+    socklen_t gl = sizeof got;
+    if (getsockname(info->listen_fd, (struct sockaddr *)&got, &gl) == 0)
+      port = got.ss_family == AF_INET6
+                 ? ntohs(((struct sockaddr_in6 *)&got)->sin6_port)
+                 : ntohs(((struct sockaddr_in *)&got)->sin_port);
+  }
+  if (strchr(cfg->bind, ':'))
+    fprintf(stderr, "stickslipd listening on http://[%s]:%d\n", cfg->bind,
+            port);
+  else
+    fprintf(stderr, "stickslipd listening on http://%s:%d\n", cfg->bind, port);
+  fflush(stderr);
+  return d;
+bad_addr:
+  fprintf(stderr, "stickslipd: --bind %s is not an IPv4 or IPv6 address\n",
+          cfg->bind);
+  free(d);
+  return NULL;
+}
+
+void srv_stop(struct srv_daemon *d) {
+  if (!d)
+    return;
+  atomic_store(&d->draining, 1);
+  MHD_socket fd = MHD_quiesce_daemon(d->mhd);
+  double until = now() + d->cfg.drain;
+  while (atomic_load(&d->metrics.in_flight) > 0 && now() < until) {
+    struct timespec ts = {0, 10 * 1000 * 1000};
+    nanosleep(&ts, NULL);
+  }
+  MHD_stop_daemon(d->mhd);
+  if (fd != MHD_INVALID_SOCKET)
+    close(fd);
+  sem_destroy(&d->slots);
+  free(d);
+}
