@@ -1,0 +1,181 @@
+/*
+ * client.c: see client.h.
+ */
+#define _GNU_SOURCE
+#include "client.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+static void header(const char *raw, const char *name, char *out, size_t n) {
+  const char *h = raw;
+  size_t ln = strlen(name);
+  out[0] = 0;
+  while ((h = strstr(h, "\r\n")) != NULL) {
+    h += 2;
+    if (h[0] == '\r')
+      return;
+    if (strncasecmp(h, name, ln) == 0 && h[ln] == ':') {
+      const char *v = h + ln + 1;
+      while (*v == ' ')
+        v++;
+      size_t k = strcspn(v, "\r\n");
+      if (k >= n)
+        k = n - 1;
+      memcpy(out, v, k);
+      out[k] = 0;
+      return;
+    }
+  }
+}
+
+int http_raw(int port, const char *req, size_t len, http_resp *r) {
+  struct sockaddr_in a;
+  int fd = socket(AF_INET, SOCK_STREAM, 0);
+  memset(r, 0, sizeof *r);
+  if (fd < 0)
+    return -1;
+  memset(&a, 0, sizeof a);
+  a.sin_family = AF_INET;
+  a.sin_port = htons((uint16_t)port);
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (connect(fd, (struct sockaddr *)&a, sizeof a) != 0) {
+    close(fd);
+    return -1;
+  }
+  /* send what the server takes; it may close early (413) */
+  for (size_t off = 0; off < len;) {
+    ssize_t k = send(fd, req + off, len - off, MSG_NOSIGNAL);
+    if (k <= 0)
+      break;
+    off += (size_t)k;
+  }
+  size_t cap = 65536, n = 0;
+  char *buf = malloc(cap);
+  for (;;) {
+    struct pollfd p = {fd, POLLIN, 0};
+    if (poll(&p, 1, 60000) <= 0)
+      break;
+    if (n + 4096 > cap) {
+      cap *= 2;
+      buf = realloc(buf, cap);
+    }
+    ssize_t k = recv(fd, buf + n, cap - n - 1, 0);
+    if (k <= 0)
+      break;
+    n += (size_t)k;
+  }
+  close(fd);
+  buf[n] = 0;
+  r->raw = buf;
+  if (n < 12 || strncmp(buf, "HTTP/1.", 7) != 0)
+    return n ? -2 : -3;
+  r->status = atoi(buf + 9);
+  char *b = strstr(buf, "\r\n\r\n");
+  r->body = b ? b + 4 : buf + n;
+  header(buf, "Content-Type", r->ctype, sizeof r->ctype);
+  header(buf, "Retry-After", r->retry_after, sizeof r->retry_after);
+  header(buf, "Allow", r->allow, sizeof r->allow);
+  return 0;
+}
+
+int http_do(int port, const char *method, const char *path, const char *ctype,
+            const char *body, http_resp *r) {
+  size_t bl = body ? strlen(body) : 0;
+  size_t cap = bl + 512;
+  char *req = malloc(cap);
+  int h = snprintf(req, cap,
+                   "%s %s HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n"
+                   "%s%s%s",
+                   method, path, ctype ? "Content-Type: " : "",
+                   ctype ? ctype : "", ctype ? "\r\n" : "");
+  if (body)
+    h += snprintf(req + h, cap - (size_t)h, "Content-Length: %zu\r\n", bl);
+  h += snprintf(req + h, cap - (size_t)h, "\r\n");
+  if (body)
+    memcpy(req + h, body, bl);
+  int rc = http_raw(port, req, (size_t)h + bl, r);
+  free(req);
+  return rc;
+}
+
+void http_free(http_resp *r) {
+  free(r->raw);
+  memset(r, 0, sizeof *r);
+}
+
+int daemon_start(const char *bin, const char *const *args, daemon_proc *d) {
+  const char *argv[32];
+  int n = 0;
+  argv[n++] = bin;
+  argv[n++] = "--port";
+  argv[n++] = "0";
+  for (int i = 0; args && args[i] && n < 30; i++)
+    argv[n++] = args[i];
+  argv[n] = NULL;
+  /* its stderr goes to a file, so a chatty access log never blocks it */
+  snprintf(d->log_path, sizeof d->log_path, "/tmp/stickslipd-test-XXXXXX");
+  int fd = mkstemp(d->log_path);
+  if (fd < 0)
+    return -1;
+  d->pid = fork();
+  if (d->pid < 0)
+    return -1;
+  if (d->pid == 0) {
+    dup2(fd, 2);
+    close(fd);
+    execv(bin, (char *const *)argv);
+    _exit(127);
+  }
+  close(fd);
+  for (int tries = 0; tries < 2000; tries++) {
+    char *log = daemon_log(d);
+    char *u = log ? strstr(log, "http://127.0.0.1:") : NULL;
+    if (u) {
+      d->port = atoi(u + strlen("http://127.0.0.1:"));
+      free(log);
+      return 0;
+    }
+    free(log);
+    int st;
+    if (waitpid(d->pid, &st, WNOHANG) == d->pid)
+      return -1;
+    usleep(10000);
+  }
+  return -1;
+}
+
+char *daemon_log(const daemon_proc *d) {
+  FILE *f = fopen(d->log_path, "rb");
+  if (!f)
+    return NULL;
+  size_t cap = 1 << 16, n = 0;
+  char *b = malloc(cap);
+  size_t k;
+  while ((k = fread(b + n, 1, cap - n - 1, f)) > 0) {
+    n += k;
+    if (n + 1 >= cap)
+      b = realloc(b, cap *= 2);
+  }
+  b[n] = 0;
+  fclose(f);
+  return b;
+}
+
+int daemon_stop(daemon_proc *d) {
+  int st;
+  kill(d->pid, SIGTERM);
+  if (waitpid(d->pid, &st, 0) != d->pid)
+    return -1;
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}

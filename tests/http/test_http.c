@@ -1,0 +1,462 @@
+/*
+ * test_http.c: stickslipd through real HTTP: every endpoint, every
+ * documented error, every limit, admission control, concurrency with a
+ * short request, and a graceful SIGTERM.  Usage: test_http PATH/stickslipd
+ */
+#define _GNU_SOURCE
+#include <jansson.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "client.h"
+#include "test.h"
+
+static const char *BIN;
+static int PORT;
+
+#define PAPER "\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,\"V\":1}"
+#define JSON "application/json"
+/* the stick -> slip point of the paper's orbit: events every few units */
+#define X0 "[1.2739277342427062,4.3629277342427093,-0.80748713672430694,1.0]"
+
+static json_t *post(const char *path, const char *body, int want) {
+  http_resp r;
+  json_t *j = NULL;
+  if (http_do(PORT, "POST", path, JSON, body, &r) != 0) {
+    TEST_FAIL_("POST %s: no response", path);
+    return NULL;
+  }
+  if (r.status != want)
+    TEST_FAIL_("POST %s %.80s: status %d, want %d: %.300s", path, body,
+               r.status, want, r.body);
+  test_checks_++;
+  j = json_loads(r.body, 0, NULL);
+  if (!j)
+    TEST_FAIL_("POST %s: body is not JSON: %.200s", path, r.body);
+  http_free(&r);
+  return j;
+}
+
+static double num(json_t *j, const char *path) {
+  /* a tiny JSON pointer: /a/0/b */
+  char buf[256], *save, *tok;
+  snprintf(buf, sizeof buf, "%s", path);
+  for (tok = strtok_r(buf, "/", &save); tok && j;
+       tok = strtok_r(NULL, "/", &save))
+    j = json_is_array(j) ? json_array_get(j, (size_t)atoi(tok))
+                         : json_object_get(j, tok);
+  return j && json_is_number(j) ? json_number_value(j) : NAN;
+}
+
+static void health_ok(const char *after) {
+  http_resp r;
+  int rc = http_do(PORT, "GET", "/health", NULL, NULL, &r);
+  if (rc != 0 || r.status != 200)
+    TEST_FAIL_("/health after %s: rc %d status %d", after, rc, r.status);
+  test_checks_++;
+  http_free(&r);
+}
+
+/* EVIDENCE: issue 4.5 every bad input gets a 4xx problem+json and the
+ * daemon answers /health afterwards */
+static void expect_problem_raw(const char *name, const char *raw, size_t len,
+                               int want, int mhd_page) {
+  http_resp r;
+  int rc = http_raw(PORT, raw, len, &r);
+  if (rc != 0)
+    TEST_FAIL_("%s: no HTTP response (rc %d)", name, rc);
+  else if (r.status != want)
+    TEST_FAIL_("%s: status %d, want %d: %.200s", name, r.status, want, r.body);
+  else if (mhd_page)
+    ; /* answered by libmicrohttpd itself, before the application */
+  else if (strncmp(r.ctype, "application/problem+json", 24) != 0)
+    TEST_FAIL_("%s: content type %s", name, r.ctype);
+  else {
+    json_t *j = json_loads(r.body, 0, NULL);
+    if (!j || (int)num(j, "/status") != want ||
+        !json_is_string(json_object_get(j, "detail")))
+      TEST_FAIL_("%s: not a problem body: %.200s", name, r.body);
+    json_decref(j);
+  }
+  test_checks_++;
+  http_free(&r);
+  health_ok(name);
+}
+
+static void expect_problem(const char *name, const char *method,
+                           const char *path, const char *ctype,
+                           const char *body, int want, const char *pointer) {
+  http_resp r;
+  int rc = http_do(PORT, method, path, ctype, body, &r);
+  test_checks_++;
+  if (rc != 0) {
+    TEST_FAIL_("%s: no response", name);
+    return;
+  }
+  if (r.status != want || strncmp(r.ctype, "application/problem+json", 24))
+    TEST_FAIL_("%s: status %d (%s), want %d problem+json: %.300s", name,
+               r.status, r.ctype, want, r.body);
+  json_t *j = json_loads(r.body, 0, NULL);
+  if (!j)
+    TEST_FAIL_("%s: body is not JSON", name);
+  if (j && pointer) {
+    const char *p = json_string_value(json_object_get(j, "pointer"));
+    if (!p || strcmp(p, pointer) != 0)
+      TEST_FAIL_("%s: pointer %s, want %s (%.200s)", name, p ? p : "(none)",
+                 pointer, r.body);
+  }
+  if (want == 405 && strcmp(r.allow, "POST") && strcmp(r.allow, "GET"))
+    TEST_FAIL_("%s: 405 without Allow", name);
+  json_decref(j);
+  http_free(&r);
+  health_ok(name);
+}
+
+static void test_endpoints(void) {
+  http_resp r;
+  ASSERT_EQ_INT(http_do(PORT, "GET", "/health", NULL, NULL, &r), 0);
+  ASSERT_EQ_INT(r.status, 200);
+  ASSERT_TRUE(strstr(r.body, "\"ok\"") != NULL);
+  http_free(&r);
+  ASSERT_EQ_INT(http_do(PORT, "GET", "/version", NULL, NULL, &r), 0);
+  ASSERT_TRUE(strstr(r.body, "\"version\":\"" SS_TEST_VERSION "\"") != NULL);
+  http_free(&r);
+  ASSERT_EQ_INT(http_do(PORT, "GET", "/openapi.json", NULL, NULL, &r), 0);
+  json_t *spec = json_loads(r.body, 0, NULL);
+  ASSERT_TRUE(spec && json_object_get(spec, "openapi"));
+  json_decref(spec);
+  http_free(&r);
+
+  /* /orbit, no guess: the paper's orbit */
+  json_t *o = post("/orbit", "{" PAPER ",\"kind\":\"overshoot\"}", 200);
+  ASSERT_NEAR(num(o, "/orbits/0/phases/0/duration"), 4.4975, 1e-3);
+  ASSERT_NEAR(num(o, "/orbits/0/stability/spectral_radius"), 0.19545, 1e-4);
+  ASSERT_TRUE(num(o, "/orbits/0/stability/jacobian_difference") < 1e-6);
+  /* /stability on the orbit as /orbit returned it */
+  json_t *body = json_object();
+  json_object_set_new(body, "params",
+                      json_deep_copy(json_object_get(
+                          json_object_get(o, "input"), "params")));
+  json_object_set(body, "orbit",
+                  json_array_get(json_object_get(o, "orbits"), 0));
+  char *sb = json_dumps(body, JSON_COMPACT);
+  json_t *s = post("/stability", sb, 200);
+  ASSERT_NEAR(num(s, "/spectral_radius"),
+              num(o, "/orbits/0/stability/spectral_radius"), 1e-12);
+  ASSERT_TRUE(json_is_true(json_object_get(s, "feasible")));
+  free(sb);
+  /* /simulate from the orbit: one period returns to x0 */
+  json_object_del(body, "orbit");
+  json_object_set(body, "orbit", json_array_get(json_object_get(o, "orbits"), 0));
+  json_object_set_new(body, "t_end",
+                      json_real(num(o, "/orbits/0/period")));
+  json_object_set_new(body, "events", json_false());
+  sb = json_dumps(body, JSON_COMPACT);
+  json_t *sim = post("/simulate", sb, 200);
+  for (int i = 0; i < 3; i++) {
+    char p1[32], p2[32];
+    snprintf(p1, sizeof p1, "/final/x/%d", i);
+    snprintf(p2, sizeof p2, "/orbits/0/x0/%d", i);
+    ASSERT_NEAR(num(sim, p1), num(o, p2), 1e-12);
+  }
+  /* EVIDENCE: DESIGN 4 a final-state request gets no events or samples */
+  ASSERT_TRUE(!json_object_get(sim, "events") &&
+              !json_object_get(sim, "samples"));
+  ASSERT_EQ_INT((long long)num(sim, "/n_events"), 3);
+  free(sb);
+  json_decref(sim);
+  json_decref(s);
+  json_decref(body);
+  json_decref(o);
+
+  /* with a guess */
+  o = post("/orbit",
+           "{" PAPER ",\"guess\":{\"durations\":[4.5,2.717,3.0536]},"
+           "\"samples\":50}",
+           200);
+  ASSERT_NEAR(num(o, "/orbits/0/period"), 10.2714298553536, 1e-9);
+  ASSERT_TRUE(json_array_size(json_object_get(
+                  json_object_get(json_array_get(json_object_get(o, "orbits"),
+                                                 0),
+                                  "samples"),
+                  "t")) == 50);
+  json_decref(o);
+  /* physical units: omega = 2, so durations halve */
+  o = post("/orbit",
+           "{\"physical\":{\"m1\":2.5,\"m2\":0.625,\"k1\":8,\"k2\":2,"
+           "\"Fs\":0.724,\"Fr\":6.178,\"v0\":2},\"kind\":\"overshoot\"}",
+           200);
+  ASSERT_NEAR(num(o, "/orbits/0/phases/0/duration"), 4.4974972908 / 2, 1e-8);
+  ASSERT_NEAR(num(o, "/input/omega"), 2, 1e-15);
+  json_decref(o);
+  /* an empty answer with its reason */
+  o = post("/orbit",
+           "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.4,"
+           "\"V\":1},\"kind\":\"overshoot\"}",
+           200);
+  ASSERT_EQ_INT(json_array_size(json_object_get(o, "orbits")), 0);
+  ASSERT_TRUE(strstr(json_string_value(json_object_get(o, "reason")), "(3.2)"));
+  json_decref(o);
+  /* samples and events */
+  sim = post("/simulate",
+             "{" PAPER ",\"initial\":" X0 ",\"t_end\":20,"
+             "\"samples\":{\"n\":11,\"from\":0,\"to\":20}}",
+             200);
+  ASSERT_EQ_INT(json_array_size(json_object_get(
+                    json_object_get(sim, "samples"), "x1")),
+                11);
+  ASSERT_TRUE(json_array_size(json_object_get(sim, "events")) > 0);
+  json_decref(sim);
+  /* metrics count what happened */
+  ASSERT_EQ_INT(http_do(PORT, "GET", "/metrics", NULL, NULL, &r), 0);
+  ASSERT_TRUE(strstr(r.body, "stickslip_requests_total{endpoint=\"orbit\","
+                             "code=\"2xx\"} ") != NULL);
+  ASSERT_TRUE(strstr(r.body, "stickslip_requests_in_flight") != NULL);
+  ASSERT_TRUE(strstr(r.body, "stickslip_request_duration_seconds_bucket") !=
+              NULL);
+  http_free(&r);
+}
+
+static void test_bad_input(void) {
+  char big[512];
+  const char *P = "/orbit", *S = "/simulate";
+  struct {
+    const char *name, *path, *body;
+    int want;
+    const char *pointer;
+  } cases[] = {
+      {"malformed", P, "{", 400, NULL},
+      {"trailing garbage", P, "{}x", 400, NULL},
+      {"top-level number", P, "42", 400, NULL},
+      {"empty object", P, "{}", 422, "/params"},
+      {"NaN literal", P, "{\"params\":{\"chi\":NaN}}", 400, NULL},
+      {"Infinity literal", P, "{\"params\":{\"chi\":Infinity}}", 400, NULL},
+      {"1e999", P, "{\"params\":{\"chi\":1e999}}", 400, NULL},
+      {"string for number", P,
+       "{\"params\":{\"chi\":\"0.2\",\"eta\":4,\"us\":0.07,\"ur\":0.6,\"V\":1}}",
+       422, "/params/chi"},
+      {"chi out of range", P,
+       "{\"params\":{\"chi\":1.5,\"eta\":4,\"us\":0.07,\"ur\":0.6,\"V\":1}}",
+       422, "/params/chi"},
+      {"us >= ur", P,
+       "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.7,\"ur\":0.6,\"V\":1}}",
+       422, "/params/us"},
+      {"missing V", P,
+       "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.07,\"ur\":0.6}}", 422,
+       "/params/V"},
+      {"unknown field", P, "{" PAPER ",\"colour\":1}", 422, "/colour"},
+      {"unknown nested field", P,
+       "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.07,\"ur\":0.6,\"V\":1,"
+       "\"w\":2}}",
+       422, "/params/w"},
+      {"duplicate keys", P,
+       "{\"params\":{\"chi\":0.2,\"chi\":0.3,\"eta\":4,\"us\":0.07,\"ur\":0.6,"
+       "\"V\":1}}",
+       400, NULL},
+      {"both params and physical", P,
+       "{" PAPER ",\"physical\":{\"m1\":1}}", 422, "/physical"},
+      {"bad kind", P, "{" PAPER ",\"kind\":\"chaos\"}", 422, "/kind"},
+      {"bad effort", P, "{" PAPER ",\"effort\":9}", 422, "/effort"},
+      {"fractional count", P, "{" PAPER ",\"samples\":1.5}", 422, "/samples"},
+      {"negative guess", P, "{" PAPER ",\"guess\":{\"durations\":[1,-1,1]}}",
+       422, "/guess/durations"},
+      {"negative t_end", S, "{" PAPER ",\"initial\":" X0 ",\"t_end\":-5}",
+       422, "/t_end"},
+      {"absurd t_end", S, "{" PAPER ",\"initial\":" X0 ",\"t_end\":1e300}",
+       422, "/t_end"},
+      {"absurd samples", S,
+       "{" PAPER ",\"initial\":" X0 ",\"t_end\":5,\"samples\":{\"n\":"
+       "1000000000}}",
+       422, "/samples/n"},
+      {"negative samples", S,
+       "{" PAPER ",\"initial\":" X0 ",\"t_end\":5,\"samples\":{\"n\":-3}}",
+       422, "/samples/n"},
+      {"short initial", S, "{" PAPER ",\"initial\":[0,0,0],\"t_end\":5}", 422,
+       "/initial"},
+      {"missing t_end", S, "{" PAPER ",\"initial\":" X0 "}", 422, "/t_end"},
+      {"null initial element", S,
+       "{" PAPER ",\"initial\":[0,null,0,0],\"t_end\":5}", 422, "/initial"},
+      {"too many events listed", S,
+       "{" PAPER ",\"initial\":" X0 ",\"t_end\":1e6}", 422, "/events"},
+      {"stability without z0", "/stability",
+       "{" PAPER ",\"phases\":[{\"mode\":\"slip\",\"duration\":1},{\"mode\":"
+       "\"stick\",\"duration\":1}]}",
+       422, "/z0"},
+      {"stability bad mode", "/stability",
+       "{" PAPER ",\"phases\":[{\"mode\":\"slide\",\"duration\":1},{\"mode\":"
+       "\"stick\",\"duration\":1}],\"z0\":[0,0,0,1]}",
+       422, "/phases/0"},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++)
+    expect_problem(cases[i].name, "POST", cases[i].path, JSON, cases[i].body,
+                   cases[i].want, cases[i].pointer);
+  expect_problem("wrong method", "GET", "/orbit", NULL, NULL, 405, NULL);
+  expect_problem("wrong method on GET route", "POST", "/health", JSON, "{}",
+                 405, NULL);
+  expect_problem("unknown path", "GET", "/nope", NULL, NULL, 404, NULL);
+  expect_problem("double slash", "GET", "//orbit", NULL, NULL, 404, NULL);
+  expect_problem("wrong content type", "POST", "/orbit", "text/plain",
+                 "{" PAPER "}", 415, NULL);
+  expect_problem("no content type", "POST", "/orbit", NULL, "{" PAPER "}", 415,
+                 NULL);
+  expect_problem("BOM", "POST", "/orbit", JSON, "\xef\xbb\xbf{" PAPER "}", 400,
+                 NULL);
+  /* 100000-deep nesting */
+  {
+    size_t n = 100000;
+    char *b = malloc(n + 1);
+    memset(b, '[', n);
+    b[n] = 0;
+    expect_problem("deep nesting", "POST", "/orbit", JSON, b, 400, NULL);
+    free(b);
+  }
+  /* a 20 MB body: refused from Content-Length */
+  {
+    size_t n = 20u << 20;
+    char *req = malloc(n + 512);
+    int h = snprintf(req, 512,
+                     "POST /orbit HTTP/1.1\r\nHost: x\r\nConnection: close\r\n"
+                     "Content-Type: application/json\r\nContent-Length: %zu"
+                     "\r\n\r\n",
+                     n);
+    memset(req + h, ' ', n);
+    expect_problem_raw("20 MB body", req, (size_t)h + n, 413, 0);
+    /* chunked, no Content-Length: refused when it passes the limit */
+    h = snprintf(req, 512,
+                 "POST /orbit HTTP/1.1\r\nHost: x\r\nConnection: close\r\n"
+                 "Content-Type: application/json\r\nTransfer-Encoding: chunked"
+                 "\r\n\r\n");
+    size_t off = (size_t)h;
+    for (int c = 0; c < 40; c++) {
+      off += (size_t)sprintf(req + off, "10000\r\n");
+      memset(req + off, ' ', 0x10000);
+      off += 0x10000;
+      off += (size_t)sprintf(req + off, "\r\n");
+    }
+    off += (size_t)sprintf(req + off, "0\r\n\r\n");
+    expect_problem_raw("chunked 2.5 MB body", req, off, 413, 0);
+    free(req);
+  }
+  snprintf(big, sizeof big,
+           "POST /orbit HTTP/1.1\r\nHost: x\r\nConnection: close\r\n"
+           "Content-Type: application/json\r\nContent-Length: "
+           "99999999999999999999999\r\n\r\n{}");
+  expect_problem_raw("overflowing Content-Length", big, strlen(big), 413, 1);
+}
+
+/* A long computation for the concurrency tests: many events, no list. */
+static const char *LONG_SIM =
+    "{" PAPER ",\"initial\":" X0 ",\"t_end\":9e6,\"events\":false}";
+
+typedef struct job {
+  int port, status;
+} job;
+
+static void *run_long(void *vp) {
+  job *j = vp;
+  http_resp r;
+  if (http_do(j->port, "POST", "/simulate", JSON, LONG_SIM, &r) == 0)
+    j->status = r.status;
+  http_free(&r);
+  return NULL;
+}
+
+static double mono(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* EVIDENCE: issue 4.4 a /health while eight long /simulate run, and
+ * admission control with 503 + Retry-After */
+static void test_concurrency(void) {
+  daemon_proc d;
+  const char *args[] = {"--workers", "2", "--queue-timeout", "0.3",
+                        "--max-events", "100000000", "--max-horizon", "1e8",
+                        "--max-seconds", "60", NULL};
+  ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
+  pthread_t th[8];
+  job jobs[8];
+  for (int i = 0; i < 8; i++) {
+    jobs[i].port = d.port;
+    jobs[i].status = 0;
+    pthread_create(&th[i], NULL, run_long, &jobs[i]);
+  }
+  usleep(200000);
+  http_resp r;
+  double t0 = mono();
+  ASSERT_EQ_INT(http_do(d.port, "GET", "/health", NULL, NULL, &r), 0);
+  double dt = mono() - t0;
+  ASSERT_EQ_INT(r.status, 200);
+  json_t *h = json_loads(r.body, 0, NULL);
+  /* the long requests are still in flight while /health is answered */
+  long inflight = (long)num(h, "/in_flight");
+  json_decref(h);
+  http_free(&r);
+  printf("concurrency: /health answered in %.2f ms with %ld requests in "
+         "flight\n",
+         dt * 1e3, inflight);
+  ASSERT_TRUE(inflight >= 3);
+  int ok = 0, busy = 0;
+  for (int i = 0; i < 8; i++) {
+    pthread_join(th[i], NULL);
+    ok += jobs[i].status == 200;
+    busy += jobs[i].status == 503;
+  }
+  printf("concurrency: 8 long requests: %d answered 200, %d answered 503\n",
+         ok, busy);
+  ASSERT_EQ_INT(ok + busy, 8);
+  ASSERT_TRUE(ok >= 2 && busy >= 1);
+  /* 503 carries Retry-After */
+  {
+    job j2[3];
+    pthread_t t2[3];
+    for (int i = 0; i < 2; i++) {
+      j2[i].port = d.port;
+      pthread_create(&t2[i], NULL, run_long, &j2[i]);
+    }
+    usleep(200000);
+    ASSERT_EQ_INT(http_do(d.port, "POST", "/simulate", JSON, LONG_SIM, &r), 0);
+    ASSERT_EQ_INT(r.status, 503);
+    ASSERT_TRUE(strcmp(r.retry_after, "1") == 0);
+    http_free(&r);
+    for (int i = 0; i < 2; i++)
+      pthread_join(t2[i], NULL);
+  }
+  /* EVIDENCE: issue 4.4 SIGTERM finishes the requests in flight, exits 0 */
+  job last = {d.port, 0};
+  pthread_t tl;
+  pthread_create(&tl, NULL, run_long, &last);
+  usleep(200000);
+  int code = daemon_stop(&d);
+  pthread_join(tl, NULL);
+  ASSERT_EQ_INT(code, 0);
+  ASSERT_EQ_INT(last.status, 200);
+  char *log = daemon_log(&d);
+  ASSERT_TRUE(log && strstr(log, "GET /health 200 "));
+  free(log);
+  unlink(d.log_path);
+}
+
+int main(int argc, char **argv) {
+  daemon_proc d;
+  if (argc < 2) {
+    fprintf(stderr, "usage: %s PATH/stickslipd\n", argv[0]);
+    return 2;
+  }
+  signal(SIGPIPE, SIG_IGN);
+  BIN = argv[1];
+  ASSERT_EQ_INT(daemon_start(BIN, NULL, &d), 0);
+  PORT = d.port;
+  test_endpoints();
+  test_bad_input();
+  ASSERT_EQ_INT(daemon_stop(&d), 0);
+  unlink(d.log_path);
+  test_concurrency();
+  TEST_DONE();
+}
