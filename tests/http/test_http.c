@@ -443,6 +443,121 @@ static void test_concurrency(void) {
   unlink(d.log_path);
 }
 
+/* Structural equality with a relative tolerance on numbers. */
+static int same_json(json_t *a, json_t *b, double rtol, char *where, size_t n) {
+  if (json_is_number(a) && json_is_number(b)) {
+    double x = json_number_value(a), y = json_number_value(b);
+    if (fabs(x - y) <= rtol * fmax(1.0, fmax(fabs(x), fabs(y))))
+      return 1;
+    snprintf(where, n, "%.17g != %.17g", x, y);
+    return 0;
+  }
+  if (json_typeof(a) != json_typeof(b)) {
+    snprintf(where, n, "types differ");
+    return 0;
+  }
+  if (json_is_object(a)) {
+    const char *k;
+    json_t *v;
+    if (json_object_size(a) != json_object_size(b)) {
+      snprintf(where, n, "object sizes differ");
+      return 0;
+    }
+    json_object_foreach(a, k, v) {
+      json_t *w = json_object_get(b, k);
+      if (!w) {
+        snprintf(where, n, "/%s missing", k);
+        return 0;
+      }
+      if (!same_json(v, w, rtol, where, n)) {
+        size_t l = strlen(where);
+        char tmp[256];
+        snprintf(tmp, sizeof tmp, "/%s%s", k, where);
+        snprintf(where, n, "%s", tmp);
+        (void)l;
+        return 0;
+      }
+    }
+    return 1;
+  }
+  if (json_is_array(a)) {
+    if (json_array_size(a) != json_array_size(b)) {
+      snprintf(where, n, "array sizes differ");
+      return 0;
+    }
+    for (size_t i = 0; i < json_array_size(a); i++)
+      if (!same_json(json_array_get(a, i), json_array_get(b, i), rtol, where,
+                     n))
+        return 0;
+    return 1;
+  }
+  if (json_equal(a, b))
+    return 1;
+  snprintf(where, n, "values differ");
+  return 0;
+}
+
+/* EVIDENCE: issue 4.1 the spec's examples are what the daemon answers */
+static void test_spec_examples(void) {
+  http_resp r;
+  ASSERT_EQ_INT(http_do(PORT, "GET", "/openapi.json", NULL, NULL, &r), 0);
+  json_t *spec = json_loads(r.body, 0, NULL);
+  http_free(&r);
+  ASSERT_TRUE(spec != NULL);
+  const char *path;
+  json_t *item;
+  int replayed = 0;
+  json_object_foreach(json_object_get(spec, "paths"), path, item) {
+    json_t *post = json_object_get(item, "post");
+    if (!post)
+      continue;
+    json_t *reqex = json_object_get(
+        json_object_get(json_object_get(json_object_get(post, "requestBody"),
+                                        "content"),
+                        "application/json"),
+        "examples");
+    const char *name;
+    json_t *ex;
+    json_object_foreach(reqex, name, ex) {
+      /* find the response example of the same name */
+      const char *code;
+      json_t *resp, *want = NULL;
+      int want_status = 0;
+      json_object_foreach(json_object_get(post, "responses"), code, resp) {
+        const char *ct;
+        json_t *media;
+        json_object_foreach(json_object_get(resp, "content"), ct, media) {
+          json_t *e = json_object_get(json_object_get(media, "examples"), name);
+          if (e) {
+            want = json_object_get(e, "value");
+            want_status = atoi(code);
+          }
+        }
+      }
+      ASSERT_TRUE(want != NULL);
+      if (!want)
+        continue;
+      char *body = json_dumps(json_object_get(ex, "value"), JSON_COMPACT);
+      http_resp rr;
+      ASSERT_EQ_INT(http_do(PORT, "POST", path, JSON, body, &rr), 0);
+      ASSERT_EQ_INT(rr.status, want_status);
+      json_t *got = json_loads(rr.body, 0, NULL);
+      char where[256] = "";
+      if (!got || !same_json(want, got, 1e-7, where, sizeof where))
+        TEST_FAIL_("spec example %s %s differs from the answer at %s", path,
+                   name, where);
+      test_checks_++;
+      replayed++;
+      json_decref(got);
+      http_free(&rr);
+      free(body);
+    }
+  }
+  printf("spec: %d examples replayed\n", replayed);
+  ASSERT_TRUE(replayed >= 8);
+  json_decref(spec);
+}
+
 int main(int argc, char **argv) {
   daemon_proc d;
   if (argc < 2) {
@@ -454,6 +569,7 @@ int main(int argc, char **argv) {
   ASSERT_EQ_INT(daemon_start(BIN, NULL, &d), 0);
   PORT = d.port;
   test_endpoints();
+  test_spec_examples();
   test_bad_input();
   ASSERT_EQ_INT(daemon_stop(&d), 0);
   unlink(d.log_path);
