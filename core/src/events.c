@@ -165,10 +165,11 @@ static double polish(const ss_trig *g, double lo, double hi, double t) {
     else
       hi = t;
     double tn = v[1] > 0 ? t - v[0] / v[1] : 0.5 * (lo + hi);
+    /* converged: the Newton correction is below the resolution of t */
+    if (fabs(tn - t) <= 2 * DBL_EPSILON * fabs(t) || hi - lo <= 0)
+      return t;
     if (!(tn > lo && tn < hi))
       tn = 0.5 * (lo + hi);
-    if (fabs(tn - t) <= 2 * DBL_EPSILON * fabs(t) || hi - lo <= 0)
-      return tn;
     t = tn;
   }
   return t;
@@ -250,6 +251,17 @@ int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
     tol = tol_at(g, &b, a);
     if (v[0] >= -tol)
       return classify(g, &b, a, tol, t);
+    /* Near a simple root: if the Newton step d = -g/g' is short enough that
+     * g' stays positive over [a, a + 2d] (g' >= g'(a) - M2 s) and the bound
+     * certifies g(a + 2d) >= |g(a)|/2 > tol, the first root is the only one
+     * in that bracket, and safeguarded Newton finds it at once. */
+    if (v[1] > 0 && v[0] < -2 * tol) {
+      double d = -v[0] / v[1];
+      if (4 * d * b.M2 < v[1] && a + 2 * d <= tmax) {
+        *t = polish(g, a, a + 2 * d, a + d);
+        return SS_OK;
+      }
+    }
     /* The bounds are applied to g(a) + tol, the largest value the exact
      * g(a) can have, so that the rounding of g cannot fake a certificate. */
     double hq = quad_step(v[0] + tol, v[1], b.M2);
