@@ -58,7 +58,17 @@ static double gfun(const ref_params *p, int mode, int which, const double y[4]) 
   return which == 0 ? f - p->ur : -p->ur - f;
 }
 
-/* Integrate from (t, y) to t1 in mode with a fresh evolve. */
+/* A driver owns the stepper, control and evolve objects; multistep
+ * steppers (msbdf) need it to be attached to the stepper. */
+static gsl_odeiv2_driver *new_driver(const gsl_odeiv2_system *sys,
+                                     const ref_opts *o) {
+  double h0 = o->h_fixed > 0 ? o->h_fixed : 1e-3;
+  return gsl_odeiv2_driver_alloc_y_new(sys, o->type, h0,
+                                       o->h_fixed > 0 ? 1 : o->atol,
+                                       o->h_fixed > 0 ? 1 : o->rtol);
+}
+
+/* Integrate from (t, y) to t1 in mode with a fresh integrator. */
 static int integrate(const ref_params *p, int mode, double t, double t1,
                      double y[4], const ref_opts *o) {
   sys_ctx c = {p, mode};
@@ -66,24 +76,20 @@ static int integrate(const ref_params *p, int mode, double t, double t1,
   int rc = GSL_SUCCESS;
   if (t1 <= t)
     return GSL_SUCCESS;
-  gsl_odeiv2_step *s = gsl_odeiv2_step_alloc(o->type, 4);
+  gsl_odeiv2_driver *d = new_driver(&sys, o);
+  if (!d)
+    return GSL_ENOMEM;
   if (o->h_fixed > 0) {
-    gsl_odeiv2_evolve *e = gsl_odeiv2_evolve_alloc(4);
     while (t < t1 && rc == GSL_SUCCESS) {
       double h = fmin(o->h_fixed, t1 - t);
-      rc = gsl_odeiv2_evolve_apply_fixed_step(e, NULL, s, &sys, &t, h, y);
+      rc = gsl_odeiv2_evolve_apply_fixed_step(d->e, NULL, d->s, &sys, &t, h, y);
     }
-    gsl_odeiv2_evolve_free(e);
   } else {
-    gsl_odeiv2_control *ctl = gsl_odeiv2_control_y_new(o->atol, o->rtol);
-    gsl_odeiv2_evolve *e = gsl_odeiv2_evolve_alloc(4);
     double h = fmin(1e-3, t1 - t);
     while (t < t1 && rc == GSL_SUCCESS)
-      rc = gsl_odeiv2_evolve_apply(e, ctl, s, &sys, &t, t1, &h, y);
-    gsl_odeiv2_evolve_free(e);
-    gsl_odeiv2_control_free(ctl);
+      rc = gsl_odeiv2_evolve_apply(d->e, d->c, d->s, &sys, &t, t1, &h, y);
   }
-  gsl_odeiv2_step_free(s);
+  gsl_odeiv2_driver_free(d);
   return rc;
 }
 
@@ -113,10 +119,12 @@ long ref_simulate(const ref_params *p, double t0, const double x0[4], int mode0,
   long n = 0;
   int mode = mode0, rc = GSL_SUCCESS;
   memcpy(y, x0, sizeof y);
-  gsl_odeiv2_step *s = gsl_odeiv2_step_alloc(o->type, 4);
-  gsl_odeiv2_control *ctl =
-      o->h_fixed > 0 ? NULL : gsl_odeiv2_control_y_new(o->atol, o->rtol);
-  gsl_odeiv2_evolve *e = gsl_odeiv2_evolve_alloc(4);
+  gsl_odeiv2_driver *drv = new_driver(&sys, o);
+  if (!drv)
+    return -1;
+  gsl_odeiv2_step *s = drv->s;
+  gsl_odeiv2_control *ctl = o->h_fixed > 0 ? NULL : drv->c;
+  gsl_odeiv2_evolve *e = drv->e;
   while (t < t_end && rc == GSL_SUCCESS) {
     double yp[4], tp = t;
     memcpy(yp, y, sizeof y);
@@ -146,8 +154,10 @@ long ref_simulate(const ref_params *p, double t0, const double x0[4], int mode0,
     while (hi - lo > o->loc_tol) {
       double mid = 0.5 * (lo + hi), ym[4];
       memcpy(ym, yp, sizeof ym);
-      if (integrate(p, mode, tp, mid, ym, o) != GSL_SUCCESS)
+      if (integrate(p, mode, tp, mid, ym, o) != GSL_SUCCESS) {
+        gsl_odeiv2_driver_free(drv);
         return -1;
+      }
       if (gfun(p, mode, which, ym) >= 0) {
         hi = mid;
       } else {
@@ -156,8 +166,10 @@ long ref_simulate(const ref_params *p, double t0, const double x0[4], int mode0,
       }
     }
     memcpy(y, yp, sizeof y);
-    if (integrate(p, mode, tp, hi, y, o) != GSL_SUCCESS)
+    if (integrate(p, mode, tp, hi, y, o) != GSL_SUCCESS) {
+      gsl_odeiv2_driver_free(drv);
       return -1;
+    }
     t = hi;
     int to = next_mode(p, mode, which, y);
     if (mode != REF_STICK || to == REF_STICK)
@@ -170,13 +182,10 @@ long ref_simulate(const ref_params *p, double t0, const double x0[4], int mode0,
     }
     n++;
     mode = to;
-    gsl_odeiv2_evolve_reset(e);
+    gsl_odeiv2_driver_reset(drv);
     h = o->h_fixed > 0 ? o->h_fixed : 1e-3;
   }
-  gsl_odeiv2_evolve_free(e);
-  if (ctl)
-    gsl_odeiv2_control_free(ctl);
-  gsl_odeiv2_step_free(s);
+  gsl_odeiv2_driver_free(drv);
   if (rc != GSL_SUCCESS)
     return -1;
   if (x_end)
