@@ -153,6 +153,8 @@ long ref_simulate(const ref_params *p, double t0, const double x0[4], int mode0,
     memcpy(ylo, yp, sizeof ylo);
     while (hi - lo > o->loc_tol) {
       double mid = 0.5 * (lo + hi), ym[4];
+      if (mid <= lo || mid >= hi)
+        break; /* the bracket is down to adjacent doubles */
       memcpy(ym, yp, sizeof ym);
       if (integrate(p, mode, tp, mid, ym, o) != GSL_SUCCESS) {
         gsl_odeiv2_driver_free(drv);
