@@ -62,7 +62,7 @@ typedef struct bounds {
 static void get_bounds(const ss_trig *g, bounds *b) {
   b->M2 = b->M3 = b->amp = 0;
   for (int k = 0; k < g->n; k++) {
-    double R = hypot(g->a[k], g->b[k]), w = g->w[k];
+    double R = sqrt(g->a[k] * g->a[k] + g->b[k] * g->b[k]), w = g->w[k];
     b->amp += R;
     b->M2 += R * w * w;
     b->M3 += R * w * w * w;
@@ -152,24 +152,39 @@ static double escape(const ss_trig *g, const bounds *b, double t0, double tol,
   return t0 + h;
 }
 
-/* Refine a zero known to lie in [lo, hi] with g(lo) <= 0 <= g(hi): Newton
- * steps kept inside the bracket, bisection when Newton leaves it. */
-static double polish(const ss_trig *g, double lo, double hi, double t) {
+/* Refine a zero known to lie in [lo, hi] with g(lo) <= 0 <= g(hi): Halley
+ * steps (cubic convergence, from g, g', g'' of one evaluation) kept inside
+ * the bracket, bisection when a step leaves it.  Once a step is so small
+ * that the next error, at most (M2 / 2 g') step^2 for Newton's part, is below
+ * the resolution of t, the step is applied and the iteration stops without
+ * another evaluation. */
+static double polish(const ss_trig *g, const bounds *b, double lo, double hi,
+                     double t) {
   for (int i = 0; i < 100; i++) {
-    double v[2];
-    ss_trig_eval(g, t, 1, v);
+    double v[3];
+    ss_trig_eval(g, t, 2, v);
     if (v[0] == 0)
       return t;
     if (v[0] < 0)
       lo = t;
     else
       hi = t;
-    double tn = v[1] > 0 ? t - v[0] / v[1] : 0.5 * (lo + hi);
-    /* converged: the Newton correction is below the resolution of t */
-    if (fabs(tn - t) <= 2 * DBL_EPSILON * fabs(t) || hi - lo <= 0)
+    double step = 0.5 * (lo + hi) - t;
+    if (v[1] > 0) {
+      double den = 2 * v[1] * v[1] - v[0] * v[2];
+      step = den > 0 ? -2 * v[0] * v[1] / den : -v[0] / v[1];
+    }
+    double tn = t + step;
+    /* converged: the correction is below the resolution of t */
+    if (fabs(step) <= 2 * DBL_EPSILON * fabs(t) || hi - lo <= 0)
       return t;
-    if (!(tn > lo && tn < hi))
-      tn = 0.5 * (lo + hi);
+    if (!(tn > lo && tn < hi)) {
+      t = 0.5 * (lo + hi);
+      continue;
+    }
+    if (v[1] > 0 && b->M2 / (2 * v[1]) * step * step <=
+                        0.5 * DBL_EPSILON * fabs(tn))
+      return tn;
     t = tn;
   }
   return t;
@@ -188,7 +203,7 @@ static int classify(const ss_trig *g, const bounds *b, double a, double tol,
   double slope_tol = 4 * sqrt(2 * tol * b->M2);
   if (v[1] > slope_tol) {
     double d = 4 * (tol + fabs(v[0])) / v[1];
-    *t = polish(g, a - d, a + d, a);
+    *t = polish(g, b, a - d, a + d, a);
     return SS_OK;
   }
   double s = a;
@@ -216,7 +231,7 @@ static int classify(const ss_trig *g, const bounds *b, double a, double tol,
     *t = s;
     return SS_GRAZING;
   }
-  *t = polish(g, a, s, a);
+  *t = polish(g, b, a, s, a);
   return SS_OK;
 }
 
@@ -258,7 +273,7 @@ int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
     if (v[1] > 0 && v[0] < -2 * tol) {
       double d = -v[0] / v[1];
       if (4 * d * b.M2 < v[1] && a + 2 * d <= tmax) {
-        *t = polish(g, a, a + 2 * d, a + d);
+        *t = polish(g, &b, a, a + 2 * d, a + d);
         return SS_OK;
       }
     }
