@@ -31,7 +31,7 @@ static double timed(job_fn fn, int runs, double *out_med) {
   return check;
 }
 
-static double find_guess(void) {
+static double find_from_guess(int fd) {
   ss_orbit_opts o;
   ss_orbit out[4];
   int n = 0;
@@ -40,23 +40,13 @@ static double find_guess(void) {
   o.guess[0] = 4.5;
   o.guess[1] = 2.717;
   o.guess[2] = 3.0536;
-  o.no_fd = 1;
+  o.no_fd = !fd;
   ss_orbit_find(&M, &o, out, 4, &n, NULL, NULL);
   return n ? out[0].period : 0;
 }
 
-static double find_guess_fd(void) {
-  ss_orbit_opts o;
-  ss_orbit out[4];
-  int n = 0;
-  memset(&o, 0, sizeof o);
-  o.n_guess = 3;
-  o.guess[0] = 4.5;
-  o.guess[1] = 2.717;
-  o.guess[2] = 3.0536;
-  ss_orbit_find(&M, &o, out, 4, &n, NULL, NULL);
-  return n ? out[0].period : 0;
-}
+static double find_guess(void) { return find_from_guess(0); }
+static double find_guess_fd(void) { return find_from_guess(1); }
 
 static double find_overshoot(void) {
   ss_orbit_opts o;

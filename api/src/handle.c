@@ -59,6 +59,26 @@ static const char *const ORBIT_KEYS[] = {
 
 static json_t *mode_json(ss_mode m) { return json_string(ss_mode_name(m)); }
 
+/* The samples of a simulation as columns t, x1, x2, v1, v2, mode, in the
+ * units of the request. */
+static json_t *samples_json(const ss_sim_result *r, double omega) {
+  json_t *s = json_object(), *col[6];
+  static const char *const names[6] = {"t", "x1", "x2", "v1", "v2", "mode"};
+  for (int c = 0; c < 6; c++)
+    col[c] = json_array();
+  for (size_t i = 0; i < r->n_samples; i++) {
+    double t, x[4];
+    ss_to_physical(omega, r->st[i], r->sx + 4 * i, &t, x);
+    json_array_append_new(col[0], api__real(t));
+    for (int c = 0; c < 4; c++)
+      json_array_append_new(col[1 + c], api__real(x[c]));
+    json_array_append_new(col[5], mode_json((ss_mode)r->smode[i]));
+  }
+  for (int c = 0; c < 6; c++)
+    api__set(s, names[c], col[c]);
+  return s;
+}
+
 static int simulate(const json_t *root, const api_limits *lim, json_t **res,
                     api_err *e) {
   api_params ap;
@@ -244,25 +264,7 @@ static int simulate(const json_t *root, const api_limits *lim, json_t **res,
     api__set(out, "events", ev);
   }
   if (r.n_samples || o.n_samples || o.n_sample_times) {
-    json_t *s = json_object(), *at = json_array(), *a1 = json_array(),
-           *a2 = json_array(), *a3 = json_array(), *a4 = json_array(),
-           *am = json_array();
-    for (size_t i = 0; i < r.n_samples; i++) {
-      ss_to_physical(ap.omega, r.st[i], r.sx + 4 * i, &tt, xx);
-      json_array_append_new(at, api__real(tt));
-      json_array_append_new(a1, api__real(xx[0]));
-      json_array_append_new(a2, api__real(xx[1]));
-      json_array_append_new(a3, api__real(xx[2]));
-      json_array_append_new(a4, api__real(xx[3]));
-      json_array_append_new(am, mode_json((ss_mode)r.smode[i]));
-    }
-    api__set(s, "t", at);
-    api__set(s, "x1", a1);
-    api__set(s, "x2", a2);
-    api__set(s, "v1", a3);
-    api__set(s, "v2", a4);
-    api__set(s, "mode", am);
-    api__set(out, "samples", s);
+    api__set(out, "samples", samples_json(&r, ap.omega));
   }
   json_t *in = api__params_echo(&ap);
   double xin[4];
@@ -394,27 +396,8 @@ static json_t *orbit_json(const ss_model *m, const ss_orbit *o, double omega,
     so.sample_to = o->period;
     so.max_events = 64 * (size_t)o->n_phases;
     so.max_seconds = lim->max_seconds;
-    if (ss_simulate(m, o->x0, &so, &r, NULL) == SS_OK) {
-      json_t *s = json_object(), *at = json_array(), *a1 = json_array(),
-             *a2 = json_array(), *a3 = json_array(), *a4 = json_array(),
-             *am = json_array();
-      for (size_t i = 0; i < r.n_samples; i++) {
-        ss_to_physical(omega, r.st[i], r.sx + 4 * i, &t, x);
-        json_array_append_new(at, api__real(t));
-        json_array_append_new(a1, api__real(x[0]));
-        json_array_append_new(a2, api__real(x[1]));
-        json_array_append_new(a3, api__real(x[2]));
-        json_array_append_new(a4, api__real(x[3]));
-        json_array_append_new(am, mode_json((ss_mode)r.smode[i]));
-      }
-      api__set(s, "t", at);
-      api__set(s, "x1", a1);
-      api__set(s, "x2", a2);
-      api__set(s, "v1", a3);
-      api__set(s, "v2", a4);
-      api__set(s, "mode", am);
-      api__set(j, "samples", s);
-    }
+    if (ss_simulate(m, o->x0, &so, &r, NULL) == SS_OK)
+      api__set(j, "samples", samples_json(&r, omega));
     ss_sim_result_free(&r);
   }
   return j;
