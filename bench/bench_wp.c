@@ -285,7 +285,7 @@ static void run_reg(int N, double eps, double ws, int plain, double tol) {
                     fabs(over_time - want_over) > 0.2 * want_over;
   if (!w->note[0])
     snprintf(w->note, sizeof w->note,
-             "|w| < 1e-3 V for %.3g (exact %.3g), w < 0 for %.3g (exact %.3g)",
+             "abs(w) < 1e-3 V for %.3g (exact %.3g), w < 0 for %.3g (exact %.3g)",
              stuck_time, want_stick, over_time, want_over);
 }
 
@@ -330,7 +330,7 @@ static void write_svg(const char *dir) {
   if (!f)
     return;
   const double W = 760, H = 480, L = 80, R = 250, Tp = 30, B = 60;
-  double xmin = -7, xmax = 2, ymin = -16, ymax = 1;
+  double xmin = -7, xmax = 2, ymin = -16, ymax = 2;
   fprintf(f, "<svg xmlns='http://www.w3.org/2000/svg' width='%g' height='%g' "
              "font-family='sans-serif' font-size='12'>\n<rect width='100%%' "
              "height='100%%' fill='white'/>\n", W, H);
