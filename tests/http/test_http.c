@@ -380,7 +380,7 @@ static void test_concurrency(void) {
   daemon_proc d;
   const char *args[] = {"--workers", "2", "--queue-timeout", "0.3",
                         "--max-events", "100000000", "--max-horizon", "1e8",
-                        "--max-seconds", "60", NULL};
+                        "--max-seconds", "60", "--drain", "60", NULL};
   ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
   pthread_t th[8];
   job jobs[8];
