@@ -288,8 +288,8 @@ SS_API void ss_trig_eval(const ss_trig *g, double t, int order, double *out);
  * @param tmax     search horizon, > t0
  * @param[out] t   the root or tangency; tmax on SS_HORIZON
  * @return SS_OK (crossing), SS_GRAZING (tangency), SS_HORIZON (g < 0 on
- *         (t0, tmax]), SS_NEVER (c1 = 0 and c0 + sum |terms| < -tol: g can
- *         never reach zero), SS_EINVAL (g positive at t0, bad arguments).
+ *         (t0, tmax]), SS_NEVER (c1 <= 0 and c0 + c1 t0 + sum |terms| <
+ *         -tol: g can never reach zero), SS_EINVAL (g positive at t0, bad arguments).
  * Thread-safe; allocates nothing.
  */
 SS_API int ss_trig_first_root(const ss_trig *g, double t0, double tmax,

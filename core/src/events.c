@@ -243,7 +243,9 @@ int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
     return SS_EINVAL;
   get_bounds(g, &b);
   double tol = tol_at(g, &b, t0);
-  if (g->c1 == 0 && g->c0 + b.amp < -tol) {
+  /* For c1 <= 0 the supremum of g over [t0, inf) is at most
+   * c0 + c1 t0 + sum R_k: below -tol, g never reaches zero. */
+  if (g->c1 <= 0 && g->c0 + g->c1 * t0 + b.amp < -tol) {
     *t = INFINITY;
     return SS_NEVER;
   }
@@ -273,7 +275,12 @@ int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
     if (v[1] > 0 && v[0] < -2 * tol) {
       double d = -v[0] / v[1];
       if (4 * d * b.M2 < v[1] && a + 2 * d <= tmax) {
-        *t = polish(g, &b, a, a + 2 * d, a + d);
+        /* start from the Halley point, which the same g, g', g'' give */
+        double den = 2 * v[1] * v[1] - v[0] * v[2];
+        double th = den > 0 ? a - 2 * v[0] * v[1] / den : a + d;
+        if (!(th > a && th < a + 2 * d))
+          th = a + d;
+        *t = polish(g, &b, a, a + 2 * d, th);
         return SS_OK;
       }
     }
