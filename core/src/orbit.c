@@ -306,8 +306,11 @@ static void trig_deriv(const ss_trig *g, ss_trig *h) {
   }
 }
 
-/* The interior local maxima of g on (0, T): zeros of g' where it falls,
- * located with the certified finder.  Calls back with each. */
+/* The interior local maxima of g on (0, T), reported through cb: the zeros
+ * of g' at which g' falls.  Walks from one zero of g' to the next with the
+ * certified finder: while g' > 0 (g rising) the next zero of g' is a maximum
+ * of g, found as the first zero of -g'; while g' < 0 it is a minimum, found
+ * as the first zero of g'. */
 static void interior_maxima(const ss_trig *g, double T,
                             void (*cb)(void *, double, double), void *ctx) {
   ss_trig h, hn;
@@ -321,27 +324,20 @@ static void interior_maxima(const ss_trig *g, double T,
     hn.b[k] = -h.b[k];
   }
   for (int guard = 0; guard < 10000 && t < T; guard++) {
-    double v[1], r;
+    double r;
     int dir;
-    (void)ss__trig_at_zero(&h, t, &dir);
-    ss_trig_eval(&h, t, 0, v);
-    /* g' < 0 (or leaving zero downward): the next zero of g' is a minimum of
-     * g; search -g' < 0 ... and the other way round. */
-    const ss_trig *f = dir < 0 ? &h : &hn;
-    int rc = ss_trig_first_root(f, t, T, &r);
+    (void)ss__trig_at_zero(&h, t, &dir); /* sign of g' at t, or where it goes */
+    int rising = dir > 0;
+    int rc = ss_trig_first_root(rising ? &hn : &h, t, T, &r);
     if (rc != SS_OK && rc != SS_GRAZING)
       break;
-    if (rc == SS_OK && f == &h && r < T * (1 - 1e-12)) {
-      /* g' rises through zero: a minimum of g; nothing to record */
-    } else if (rc == SS_OK && f == &hn && r > 0 && r < T * (1 - 1e-12)) {
+    if (rising && rc == SS_OK && r > 0 && r < T * (1 - 1e-12)) {
       double gv[1];
       ss_trig_eval(g, r, 0, gv);
       cb(ctx, r, gv[0]);
     }
-    if (r <= t) {
-      /* at a zero of g' already: step past it */
+    if (r <= t) /* at a zero of g' already: step past it */
       r = t + 1e-9 * fmax(1.0, T);
-    }
     t = r;
   }
 }
@@ -349,7 +345,6 @@ static void interior_maxima(const ss_trig *g, double T,
 typedef struct max_ctx {
   ss_margin *mg;
   int phase;
-  double vmax;
 } max_ctx;
 
 static void record_max(void *vp, double t, double g) {
@@ -403,7 +398,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
     memcpy(xs, sim.x, sizeof xs);
     /* margins of this phase from its closed form */
     ss_trig g;
-    max_ctx mc = {NULL, k, 0};
+    max_ctx mc = {NULL, k};
     if (mode == SS_MODE_STICK) {
       mc.mg = &o->stick_upper;
       ss__switching(m, mode, 1, xs, &g);
@@ -435,8 +430,6 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
     }
     /* the certified finder: the first event must be this phase's end */
     int rc = ss_sim_next_event(&sim, ss_sim_time(&sim) + tau + slack, &ev);
-    double tloc = rc == SS_OK ? ev.t - (sim.t_hi + sim.t_lo - (ev.t - ev.t)) : 0;
-    (void)tloc;
     if (rc == SS_HORIZON)
       return ss__fail(d, SS_INFEASIBLE, "phases", tau,
                       "phase %d (%s) does not end at its duration %.9g: its "
@@ -444,8 +437,6 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
                       k, ss_mode_name(mode), tau);
     if (rc)
       return ss__fail(d, rc, "phases", tau, "event search failed");
-    double t_start = ev.t; /* recomputed below */
-    (void)t_start;
     if (ev.kind == SS_EVENT_GRAZING) {
       check_fail(d,
                  "phase %d (%s) touches its switching surface tangentially at "
