@@ -4,7 +4,11 @@
  * short request, and a graceful SIGTERM.  Usage: test_http PATH/stickslipd
  */
 #define _GNU_SOURCE
+#include <arpa/inet.h>
 #include <jansson.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
@@ -560,6 +564,55 @@ static void test_spec_examples(void) {
   json_decref(spec);
 }
 
+static int open_idle(int port) {
+  struct sockaddr_in a;
+  int fd = socket(AF_INET, SOCK_STREAM, 0);
+  memset(&a, 0, sizeof a);
+  a.sin_family = AF_INET;
+  a.sin_port = htons((uint16_t)port);
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (connect(fd, (struct sockaddr *)&a, sizeof a) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+/* Has the server closed this connection?  Waits up to ms. */
+static int closed_by_server(int fd, int ms) {
+  struct pollfd p = {fd, POLLIN, 0};
+  char c;
+  if (poll(&p, 1, ms) <= 0)
+    return 0;
+  return recv(fd, &c, 1, 0) == 0;
+}
+
+/* EVIDENCE: issue 4.4 per-IP connection limit and idle timeout */
+static void test_connection_limits(void) {
+  daemon_proc d;
+  const char *args[] = {"--per-ip-connections", "2", "--connection-timeout",
+                        "1", NULL};
+  ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
+  int a = open_idle(d.port), b = open_idle(d.port);
+  ASSERT_TRUE(a >= 0 && b >= 0);
+  usleep(100000);
+  /* a third connection from the same address is dropped at once */
+  http_resp r;
+  ASSERT_TRUE(http_do(d.port, "GET", "/health", NULL, NULL, &r) != 0);
+  http_free(&r);
+  /* idle connections are closed after the timeout */
+  ASSERT_TRUE(closed_by_server(a, 4000));
+  ASSERT_TRUE(closed_by_server(b, 4000));
+  close(a);
+  close(b);
+  usleep(100000);
+  ASSERT_EQ_INT(http_do(d.port, "GET", "/health", NULL, NULL, &r), 0);
+  ASSERT_EQ_INT(r.status, 200);
+  http_free(&r);
+  ASSERT_EQ_INT(daemon_stop(&d), 0);
+  unlink(d.log_path);
+}
+
 int main(int argc, char **argv) {
   daemon_proc d;
   if (argc < 2) {
@@ -575,6 +628,7 @@ int main(int argc, char **argv) {
   test_bad_input();
   ASSERT_EQ_INT(daemon_stop(&d), 0);
   unlink(d.log_path);
+  test_connection_limits();
   test_concurrency();
   TEST_DONE();
 }
