@@ -76,6 +76,22 @@ int ss_model_init(ss_model *m, const ss_params *p, ss_diag *d) {
   m->phiinv[1][1] = m->phi[0][0] / det;
   m->d0[0] = p->us / (1 - chi);
   m->d0[1] = p->us / (chi * (1 - chi));
+  /* Parameters that are each in range can still be too extreme together
+   * for double precision (chi eta overflowing, d0 beyond DBL_MAX). */
+  double all[] = {m->lam[0], m->lam[1], m->phiinv[0][0], m->phiinv[0][1],
+                  m->phiinv[1][0], m->phiinv[1][1], m->d0[0], m->d0[1]};
+  for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+    if (!isfinite(all[i]))
+      return ss__fail(d, SS_EDOMAIN, "eta", p->eta,
+                      "chi = %.3g, eta = %.3g, us = %.3g are too extreme "
+                      "together: the modal decomposition overflows double "
+                      "precision",
+                      chi, p->eta, p->us);
+  if (!(m->lam[0] > 0))
+    return ss__fail(d, SS_EDOMAIN, "eta", p->eta,
+                    "chi eta (1 - chi) = %.3g underflows: the slow modal "
+                    "frequency is zero in double precision",
+                    ce * (1 - chi));
   return SS_OK;
 }
 

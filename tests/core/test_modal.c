@@ -41,6 +41,17 @@ static void test_params(void) {
     ASSERT_TRUE(strcmp(d.where, bad[i].where) == 0);
     ASSERT_TRUE(strlen(d.text) > 10);
   }
+  /* each parameter in range, together too extreme for doubles */
+  {
+    ss_model m;
+    ss_params big = {0.5, 1e300, 0.1, 0.2, 1}, tiny = {1e-300, 1e-300, 0.1,
+                                                       0.2, 1};
+    ss_diag_clear(&d);
+    ASSERT_EQ_INT(ss_model_init(&m, &big, &d), SS_EDOMAIN);
+    ASSERT_TRUE(strstr(d.text, "too extreme") != NULL);
+    ss_diag_clear(&d);
+    ASSERT_EQ_INT(ss_model_init(&m, &tiny, &d), SS_EDOMAIN);
+  }
   /* physical units: k1 + k2 = 10, m1 = 2.5 -> omega = 2 */
   ss_physical ph = {2.5, 0.625, 8, 2, 0.724, 6.178, 2.0};
   double om;
