@@ -423,7 +423,7 @@ static int parse_modes(const json_t *arr, const char *ptr, int n_expect,
     const char *s = NULL;
     char p[160];
     snprintf(p, sizeof p, "%s/%zu", ptr, i);
-    if (json_is_string(v)) {
+    if (json_is_string(v) && !dur) {
       s = json_string_value(v);
     } else if (json_is_object(v) && dur) {
       static const char *const PK[] = {"mode", "duration", NULL};

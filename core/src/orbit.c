@@ -502,7 +502,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
 int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
                    const double *tau, int no_fd, ss_orbit *o, ss_diag *d) {
   oeq q;
-  double x[MAXP], z0[4], resid;
+  double x[MAXP], z0[4] = {0, 0, 0, 0}, resid = INFINITY;
   int iters = 0, rc;
   if (!m || !modes || !tau || !o)
     return ss__fail(d, SS_EINVAL, "orbit", 0, "missing argument");

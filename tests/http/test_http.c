@@ -293,6 +293,9 @@ static void test_bad_input(void) {
        "{" PAPER ",\"phases\":[{\"mode\":\"slip\",\"duration\":1},{\"mode\":"
        "\"stick\",\"duration\":1}]}",
        422, "/z0"},
+      {"stability phases as bare modes", "/stability",
+       "{" PAPER ",\"phases\":[\"slip\",\"stick\"],\"z0\":[0,0,0,1]}", 422,
+       "/phases/0"},
       {"stability bad mode", "/stability",
        "{" PAPER ",\"phases\":[{\"mode\":\"slide\",\"duration\":1},{\"mode\":"
        "\"stick\",\"duration\":1}],\"z0\":[0,0,0,1]}",
