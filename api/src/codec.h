@@ -72,6 +72,11 @@ json_t *api__real(double v);
 json_t *api__vec4(const double x[4]);
 int api__set(json_t *obj, const char *key, json_t *v);
 
+/* The compact text of @a j (malloc'd, NUL-terminated, length in *len), with
+ * reals in the shortest of 15-17 significant digits that reads back exactly;
+ * NULL when out of memory.  Strings must be valid UTF-8 (jansson's own). */
+char *api__dump(const json_t *j, size_t *len);
+
 /* The core's diagnostic as a problem, with the JSON pointer of where. */
 void api__from_diag(api_err *e, int rc, const ss_diag *d, const char *ptr_base);
 

@@ -762,7 +762,7 @@ int api_handle(api_endpoint ep, const char *body, size_t len,
     api__problem_response(&e, out);
     return out->status;
   }
-  out->body = json_dumps(res, JSON_COMPACT | JSON_REAL_PRECISION(17));
+  out->body = api__dump(res, &out->len);
   json_decref(res);
   if (!out->body) {
     api__fail(&e, 500, "internal", NULL, "could not encode the response");
@@ -770,7 +770,6 @@ int api_handle(api_endpoint ep, const char *body, size_t len,
     return out->status;
   }
   out->status = 200;
-  out->len = strlen(out->body);
   out->content_type = "application/json";
   return 200;
 }
