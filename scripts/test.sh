@@ -21,3 +21,9 @@ for variant in release sanitize; do
   (cd "$dir" && UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
      ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs")
 done
+if command -v clang-format >/dev/null; then
+  echo "== format check"
+  cmake --build build-test-release --target format-check
+else
+  echo "== format check skipped: no clang-format (apt-get install clang-format)"
+fi

@@ -99,9 +99,9 @@ static enum MHD_Result send_body(struct MHD_Connection *c, req *r, int status,
 static enum MHD_Result send_api(struct MHD_Connection *c, req *r,
                                 api_response *ar, int retry_after,
                                 const char *allow, int close) {
-  enum MHD_Result ok = send_body(c, r, ar->status, ar->body, ar->len,
-                                 ar->content_type, 1, retry_after, allow,
-                                 close);
+  enum MHD_Result ok =
+      send_body(c, r, ar->status, ar->body, ar->len, ar->content_type, 1,
+                retry_after, allow, close);
   ar->body = NULL;
   return ok;
 }
@@ -112,8 +112,8 @@ static enum MHD_Result send_problem(struct MHD_Connection *c, req *r,
                                     double limit_value, const char *allow) {
   api_response ar;
   api_problem(&ar, status, type, NULL, detail, NULL, limit, limit_value);
-  return send_api(c, r, &ar, status == 503, allow, status == 413 ||
-                                                      status == 503);
+  return send_api(c, r, &ar, status == 503, allow,
+                  status == 413 || status == 503);
 }
 
 static enum MHD_Result send_json(struct MHD_Connection *c, req *r, json_t *o) {
@@ -140,8 +140,8 @@ static const route ROUTES[] = {
     {"/metrics", "GET", SRV_EP_METRICS},
 };
 
-static enum MHD_Result serve_get(struct srv_daemon *d,
-                                 struct MHD_Connection *c, req *r) {
+static enum MHD_Result serve_get(struct srv_daemon *d, struct MHD_Connection *c,
+                                 req *r) {
   json_t *o;
   switch (r->ep) {
   case SRV_EP_HEALTH:
@@ -171,8 +171,7 @@ static enum MHD_Result serve_get(struct srv_daemon *d,
       return send_problem(c, r, 500, "internal", "out of memory", NULL, 0,
                           NULL);
     return send_body(c, r, 200, s, strlen(s),
-                     "text/plain; version=0.0.4; charset=utf-8", 1, 0, NULL,
-                     0);
+                     "text/plain; version=0.0.4; charset=utf-8", 1, 0, NULL, 0);
   }
   }
   return send_problem(c, r, 404, "not-found", "no such resource", NULL, 0,
@@ -262,8 +261,8 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
           rt = &ROUTES[i];
           break;
         }
-        snprintf(r->p_detail, sizeof r->p_detail, "%s takes %s",
-                 ROUTES[i].path, ROUTES[i].method);
+        snprintf(r->p_detail, sizeof r->p_detail, "%s takes %s", ROUTES[i].path,
+                 ROUTES[i].method);
         return defer(r, 405, "method-not-allowed", NULL, ROUTES[i].method);
       }
     if (!rt)
@@ -286,7 +285,8 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
       if (errno == ERANGE || n > d->cfg.lim.max_body) {
         char detail[128];
         snprintf(detail, sizeof detail,
-                 "the body is over the limit of %zu bytes", d->cfg.lim.max_body);
+                 "the body is over the limit of %zu bytes",
+                 d->cfg.lim.max_body);
         return send_problem(c, r, 413, "limit-exceeded", detail, "max_body",
                             (double)d->cfg.lim.max_body, NULL);
       }
@@ -392,17 +392,16 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     return NULL;
   }
   d->mhd = MHD_start_daemon(
-      flags, (uint16_t)cfg->port, NULL, NULL, handler, d,
-      MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
-      MHD_OPTION_CONNECTION_LIMIT, cfg->max_conn,
+      flags, (uint16_t)cfg->port, NULL, NULL, handler, d, MHD_OPTION_SOCK_ADDR,
+      (struct sockaddr *)&ss, MHD_OPTION_CONNECTION_LIMIT, cfg->max_conn,
       MHD_OPTION_PER_IP_CONNECTION_LIMIT, cfg->per_ip,
       MHD_OPTION_CONNECTION_TIMEOUT, cfg->timeout,
       MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)65536,
       MHD_OPTION_STRICT_FOR_CLIENT, (int)1, MHD_OPTION_NOTIFY_COMPLETED,
       completed, d, MHD_OPTION_END);
   if (!d->mhd) {
-    fprintf(stderr, "stickslipd: cannot listen on %s port %d: %s\n",
-            cfg->bind, cfg->port, strerror(errno));
+    fprintf(stderr, "stickslipd: cannot listen on %s port %d: %s\n", cfg->bind,
+            cfg->port, strerror(errno));
     sem_destroy(&d->slots);
     free(d);
     return NULL;

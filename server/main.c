@@ -61,8 +61,8 @@ static int parse_ull(const char *flag, const char *s, unsigned long long lo,
     goto bad;
   return 0;
 bad:
-  fprintf(stderr, "stickslipd: %s needs a whole number in [%llu, %llu]\n",
-          flag, lo, hi);
+  fprintf(stderr, "stickslipd: %s needs a whole number in [%llu, %llu]\n", flag,
+          lo, hi);
   return -1;
 }
 
@@ -77,8 +77,7 @@ static int parse_dbl(const char *flag, const char *s, double lo, double hi,
     goto bad;
   return 0;
 bad:
-  fprintf(stderr, "stickslipd: %s needs a number in [%g, %g]\n", flag, lo,
-          hi);
+  fprintf(stderr, "stickslipd: %s needs a number in [%g, %g]\n", flag, lo, hi);
   return -1;
 }
 

@@ -8,12 +8,12 @@
 #include "server.h"
 
 const char *const srv_ep_names[SRV_EP_COUNT] = {
-    "orbit", "simulate", "stability", "health",
-    "version", "openapi", "metrics", "other"};
+    "orbit",   "simulate", "stability", "health",
+    "version", "openapi",  "metrics",   "other"};
 
-const double srv_bucket_bounds[SRV_BUCKETS] = {
-    0.0001, 0.00025, 0.0005, 0.001, 0.0025, 0.005,
-    0.01,   0.025,   0.05,   0.1,   1.0,    10.0};
+const double srv_bucket_bounds[SRV_BUCKETS] = {0.0001, 0.00025, 0.0005, 0.001,
+                                               0.0025, 0.005,   0.01,   0.025,
+                                               0.05,   0.1,     1.0,    10.0};
 
 void srv_metrics_observe(srv_metrics *m, int ep, int status, double seconds) {
   int cls = status / 100;
@@ -103,14 +103,16 @@ char *srv_metrics_render(const srv_metrics *m) {
     put(&s, "stickslip_request_duration_seconds_count{endpoint=\"%s\"} %lu\n",
         srv_ep_names[e], cum);
   }
-  put(&s, "# HELP stickslip_requests_in_flight Requests being served.\n"
-          "# TYPE stickslip_requests_in_flight gauge\n"
-          "stickslip_requests_in_flight %ld\n",
+  put(&s,
+      "# HELP stickslip_requests_in_flight Requests being served.\n"
+      "# TYPE stickslip_requests_in_flight gauge\n"
+      "stickslip_requests_in_flight %ld\n",
       atomic_load(&m->in_flight));
-  put(&s, "# HELP stickslip_rejected_busy_total Requests answered 503 "
-          "because every compute slot stayed busy.\n"
-          "# TYPE stickslip_rejected_busy_total counter\n"
-          "stickslip_rejected_busy_total %lu\n",
+  put(&s,
+      "# HELP stickslip_rejected_busy_total Requests answered 503 "
+      "because every compute slot stayed busy.\n"
+      "# TYPE stickslip_rejected_busy_total counter\n"
+      "stickslip_rejected_busy_total %lu\n",
       atomic_load(&m->rejected_busy));
   return s.p;
 }

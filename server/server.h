@@ -11,16 +11,16 @@
 
 /** Everything a flag or an environment variable can set. */
 typedef struct srv_config {
-  char bind[64];          /**< --bind, STICKSLIP_BIND (127.0.0.1) */
-  int port;               /**< --port, STICKSLIP_PORT (8080; 0: any free) */
-  api_limits lim;         /**< per-request limits */
-  unsigned max_conn;      /**< --max-connections (256) */
-  unsigned per_ip;        /**< --per-ip-connections (64) */
-  unsigned timeout;       /**< --connection-timeout seconds (10) */
-  unsigned workers;       /**< --workers: computations at once (cores) */
-  double queue_timeout;   /**< --queue-timeout seconds (2) */
-  double drain;           /**< --drain seconds at shutdown (8) */
-  int quiet;              /**< --quiet: no access log */
+  char bind[64];        /**< --bind, STICKSLIP_BIND (127.0.0.1) */
+  int port;             /**< --port, STICKSLIP_PORT (8080; 0: any free) */
+  api_limits lim;       /**< per-request limits */
+  unsigned max_conn;    /**< --max-connections (256) */
+  unsigned per_ip;      /**< --per-ip-connections (64) */
+  unsigned timeout;     /**< --connection-timeout seconds (10) */
+  unsigned workers;     /**< --workers: computations at once (cores) */
+  double queue_timeout; /**< --queue-timeout seconds (2) */
+  double drain;         /**< --drain seconds at shutdown (8) */
+  int quiet;            /**< --quiet: no access log */
 } srv_config;
 
 /* Endpoints, for metrics. */

@@ -48,8 +48,8 @@ int api__number(const json_t *obj, const char *ptr, const char *key,
 int api__count(const json_t *obj, const char *ptr, const char *key,
                int required, long long lo, long long hi, long long *out,
                api_err *e);
-int api__bool(const json_t *obj, const char *ptr, const char *key,
-              int required, int *out, api_err *e);
+int api__bool(const json_t *obj, const char *ptr, const char *key, int required,
+              int *out, api_err *e);
 int api__vec(const json_t *obj, const char *ptr, const char *key, int required,
              size_t n, double *out, api_err *e);
 int api__string(const json_t *obj, const char *ptr, const char *key,

@@ -111,8 +111,8 @@ int api__count(const json_t *obj, const char *ptr, const char *key,
   return 0;
 }
 
-int api__bool(const json_t *obj, const char *ptr, const char *key,
-              int required, int *out, api_err *e) {
+int api__bool(const json_t *obj, const char *ptr, const char *key, int required,
+              int *out, api_err *e) {
   char p[160];
   json_t *v;
   int rc = lookup(obj, ptr, key, required, &v, p, sizeof p, e);
@@ -157,15 +157,16 @@ int api__vec(const json_t *obj, const char *ptr, const char *key, int required,
   return 0;
 }
 
-void api__from_diag(api_err *e, int rc, const ss_diag *d, const char *ptr_base) {
+void api__from_diag(api_err *e, int rc, const ss_diag *d,
+                    const char *ptr_base) {
   char p[160];
   if (d->where[0] && ptr_base)
     snprintf(p, sizeof p, "%s/%s", ptr_base, d->where);
   else
     snprintf(p, sizeof p, "%s", ptr_base ? ptr_base : "");
   if (rc == SS_ENOMEM || rc == SS_EBUG)
-    api__fail(e, 500, "internal", NULL, "%s", d->text[0] ? d->text
-                                                         : ss_strerror(rc));
+    api__fail(e, 500, "internal", NULL, "%s",
+              d->text[0] ? d->text : ss_strerror(rc));
   else
     api__fail(e, 422, "invalid-value", p, "%s",
               d->text[0] ? d->text : ss_strerror(rc));

@@ -9,9 +9,7 @@
 
 #include "codec.h"
 
-json_t *api__real(double v) {
-  return isfinite(v) ? json_real(v) : json_null();
-}
+json_t *api__real(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 
 json_t *api__vec4(const double x[4]) {
   json_t *a = json_array();

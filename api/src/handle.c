@@ -48,14 +48,14 @@ static int too_deep(const char *s, size_t n, int max) {
 /* ------------------------------------------------------------------ */
 
 static const char *const SIM_KEYS[] = {
-    "params", "physical", "initial", "orbit", "t0", "t_end",
-    "events", "stop_after", "samples", NULL};
+    "params", "physical", "initial",    "orbit",   "t0",
+    "t_end",  "events",   "stop_after", "samples", NULL};
 static const char *const SAMPLE_KEYS[] = {"n", "from", "to", "t", NULL};
 /* An orbit object as /orbit returns it; only x0 is used. */
 static const char *const ORBIT_KEYS[] = {
-    "kind", "phases", "period", "n_turns", "z0", "x0", "margins",
-    "residual", "closure", "stability", "samples", "source", "iterations",
-    NULL};
+    "kind",    "phases",  "period",     "n_turns", "z0",
+    "x0",      "margins", "residual",   "closure", "stability",
+    "samples", "source",  "iterations", NULL};
 
 static json_t *mode_json(ss_mode m) { return json_string(ss_mode_name(m)); }
 
@@ -175,7 +175,8 @@ static int simulate(const json_t *root, const api_limits *lim, json_t **res,
         return -1;
       if ((size_t)n > lim->max_samples)
         return api__limit(e, "max_samples", (double)lim->max_samples,
-                          "/samples/n", "%lld samples asked for, the limit is "
+                          "/samples/n",
+                          "%lld samples asked for, the limit is "
                           "%zu",
                           n, lim->max_samples);
       int rf = api__number(samp, "/samples", "from", 0, &from, e);
@@ -255,9 +256,10 @@ static int simulate(const json_t *root, const api_limits *lim, json_t **res,
       api__set(one, "t", api__real(tt));
       api__set(one, "from", mode_json(r.events[i].from));
       api__set(one, "to", mode_json(r.events[i].to));
-      api__set(one, "kind", json_string(r.events[i].kind == SS_EVENT_GRAZING
-                                            ? "grazing"
-                                            : "transition"));
+      api__set(one, "kind",
+               json_string(r.events[i].kind == SS_EVENT_GRAZING
+                               ? "grazing"
+                               : "transition"));
       api__set(one, "x", api__vec4(xx));
       json_array_append_new(ev, one);
     }
@@ -277,8 +279,8 @@ static int simulate(const json_t *root, const api_limits *lim, json_t **res,
   if (stop_after)
     api__set(in, "stop_after", json_integer(stop_after));
   api__set(out, "input", in);
-  api__set(out, "units", json_string(ap.physical ? "physical"
-                                                 : "dimensionless"));
+  api__set(out, "units",
+           json_string(ap.physical ? "physical" : "dimensionless"));
   api__set(out, "version", json_string(SS_VERSION));
   ss_sim_result_free(&r);
   *res = out;
@@ -404,7 +406,7 @@ static json_t *orbit_json(const ss_model *m, const ss_orbit *o, double omega,
 }
 
 static const char *const ORBIT_REQ_KEYS[] = {
-    "params", "physical", "kind", "guess", "samples", "effort",
+    "params",     "physical",          "kind", "guess", "samples", "effort",
     "max_period", "finite_difference", NULL};
 static const char *const GUESS_KEYS[] = {"durations", "modes", NULL};
 
@@ -431,8 +433,8 @@ static int parse_modes(const json_t *arr, const char *ptr, int n_expect,
           api__number(v, p, "duration", 1, &dur[i], e))
         return -1;
       if (!(dur[i] > 0))
-        return api__fail(e, 422, "invalid-value", p,
-                         "%s/duration must be > 0", p);
+        return api__fail(e, 422, "invalid-value", p, "%s/duration must be > 0",
+                         p);
     } else {
       return api__fail(e, 422, "invalid-type", p,
                        dur ? "%s must be a phase {mode, duration}"
@@ -511,8 +513,8 @@ static int orbit(const json_t *root, const api_limits *lim, json_t **res,
     }
     json_t *mo = json_object_get(guess, "modes");
     if (mo) {
-      if (parse_modes(mo, "/guess/modes", opts.n_guess, opts.guess_modes,
-                      NULL, e) < 0)
+      if (parse_modes(mo, "/guess/modes", opts.n_guess, opts.guess_modes, NULL,
+                      e) < 0)
         return -1;
     } else if (opts.n_guess > 3) {
       return api__fail(e, 422, "missing-field", "/guess/modes",
@@ -593,8 +595,8 @@ static int orbit(const json_t *root, const api_limits *lim, json_t **res,
     api__set(in, "guess", g);
   }
   api__set(res_o, "input", in);
-  api__set(res_o, "units", json_string(ap.physical ? "physical"
-                                                   : "dimensionless"));
+  api__set(res_o, "units",
+           json_string(ap.physical ? "physical" : "dimensionless"));
   api__set(res_o, "version", json_string(SS_VERSION));
   free(out);
   *res = res_o;
@@ -681,8 +683,7 @@ static int stability(const json_t *root, const api_limits *lim, json_t **res,
   const ss_params *p = &m.p;
   double sec = p->chi * (z0[1] - z0[0]) - (p->ur - p->us);
   double sec2 = z0[3] - p->V;
-  api__set(out, "section_residual",
-           api__real(fmax(fabs(sec), fabs(sec2))));
+  api__set(out, "section_residual", api__real(fmax(fabs(sec), fabs(sec2))));
   api__set(out, "feasible", json_boolean(feas == SS_OK));
   if (feas == SS_OK)
     api__set(out, "closure", api__real(o.closure));
@@ -702,8 +703,8 @@ static int stability(const json_t *root, const api_limits *lim, json_t **res,
   api__set(in, "z0", api__vec4(zz));
   api__set(in, "finite_difference", json_boolean(fd));
   api__set(out, "input", in);
-  api__set(out, "units", json_string(ap.physical ? "physical"
-                                                 : "dimensionless"));
+  api__set(out, "units",
+           json_string(ap.physical ? "physical" : "dimensionless"));
   api__set(out, "version", json_string(SS_VERSION));
   *res = out;
   return 0;

@@ -58,20 +58,20 @@ extern "C" {
  * The one table of status codes: name, value, message.  Positive values are
  * information, negative values are failures.
  */
-#define SS_STATUS_MAP(X)                                                      \
-  X(OK, 0, "success")                                                         \
-  X(GRAZING, 1, "trajectory touches a switching surface tangentially")       \
-  X(HORIZON, 2, "no event before the horizon")                               \
-  X(NEVER, 3, "the switching function can never reach zero")                 \
+#define SS_STATUS_MAP(X)                                                       \
+  X(OK, 0, "success")                                                          \
+  X(GRAZING, 1, "trajectory touches a switching surface tangentially")         \
+  X(HORIZON, 2, "no event before the horizon")                                 \
+  X(NEVER, 3, "the switching function can never reach zero")                   \
   X(INFEASIBLE, 4, "a root of the orbit equations that violates a constraint") \
-  X(EDOMAIN, -1, "parameter outside its domain")                             \
-  X(EINVAL, -2, "invalid argument")                                          \
-  X(ENOCONV, -3, "iteration did not converge")                               \
-  X(ELIMIT_EVENTS, -4, "event limit reached before the end of the run")      \
-  X(ELIMIT_SAMPLES, -5, "sample limit exceeded")                             \
-  X(ELIMIT_TIME, -6, "compute time budget exhausted")                        \
-  X(ENOMEM, -7, "out of memory")                                             \
-  X(ESINGULAR, -8, "singular linear system")                                 \
+  X(EDOMAIN, -1, "parameter outside its domain")                               \
+  X(EINVAL, -2, "invalid argument")                                            \
+  X(ENOCONV, -3, "iteration did not converge")                                 \
+  X(ELIMIT_EVENTS, -4, "event limit reached before the end of the run")        \
+  X(ELIMIT_SAMPLES, -5, "sample limit exceeded")                               \
+  X(ELIMIT_TIME, -6, "compute time budget exhausted")                          \
+  X(ENOMEM, -7, "out of memory")                                               \
+  X(ESINGULAR, -8, "singular linear system")                                   \
   X(EBUG, -9, "internal invariant violated")
 
 enum {
@@ -90,10 +90,10 @@ SS_API const char *ss_status_name(int status);
  * ignored, so the most specific cause survives.
  */
 typedef struct ss_diag {
-  int status;      /**< the status the failing call returned */
-  char where[32];  /**< parameter or phase concerned, e.g. "chi", "stick" */
-  double value;    /**< the offending value, when there is one */
-  char text[192];  /**< a sentence a person can act on */
+  int status;     /**< the status the failing call returned */
+  char where[32]; /**< parameter or phase concerned, e.g. "chi", "stick" */
+  double value;   /**< the offending value, when there is one */
+  char text[192]; /**< a sentence a person can act on */
 } ss_diag;
 
 /** Reset @a d to "no error".  NULL is allowed. */
@@ -289,8 +289,8 @@ SS_API void ss_trig_eval(const ss_trig *g, double t, int order, double *out);
  * @param[out] t   the root or tangency; tmax on SS_HORIZON
  * @return SS_OK (crossing), SS_GRAZING (tangency), SS_HORIZON (g < 0 on
  *         (t0, tmax]), SS_NEVER (c1 <= 0 and c0 + c1 t0 + sum |terms| <
- *         -tol: g can never reach zero), SS_EINVAL (g positive at t0, bad arguments).
- * Thread-safe; allocates nothing.
+ *         -tol: g can never reach zero), SS_EINVAL (g positive at t0, bad
+ * arguments). Thread-safe; allocates nothing.
  */
 SS_API int ss_trig_first_root(const ss_trig *g, double t0, double tmax,
                               double *t);
@@ -307,10 +307,10 @@ typedef enum ss_event_kind {
 
 /** One event: the switching time, the modes before and after, the state. */
 typedef struct ss_event {
-  double t;            /**< absolute time of the event */
-  ss_mode from, to;    /**< from == to for a grazing that changes nothing */
+  double t;         /**< absolute time of the event */
+  ss_mode from, to; /**< from == to for a grazing that changes nothing */
   ss_event_kind kind;
-  double x[4];         /**< state at the event */
+  double x[4]; /**< state at the event */
 } ss_event;
 
 /**
@@ -322,13 +322,13 @@ typedef struct ss_event {
  */
 typedef struct ss_sim {
   const ss_model *m;
-  ss_mode mode;        /**< current mode */
-  double t_hi, t_lo;   /**< absolute time of the anchor */
-  double x[4];         /**< state at the anchor */
-  int perpetual;       /**< the current slip can never end */
-  double t_next;       /**< local time of the next event (valid if have_next) */
-  int next_status;     /**< SS_OK, SS_GRAZING or SS_HORIZON for t_next */
-  int next_sign;       /**< stick: +1 next event at +ur, -1 at -ur */
+  ss_mode mode;      /**< current mode */
+  double t_hi, t_lo; /**< absolute time of the anchor */
+  double x[4];       /**< state at the anchor */
+  int perpetual;     /**< the current slip can never end */
+  double t_next;     /**< local time of the next event (valid if have_next) */
+  int next_status;   /**< SS_OK, SS_GRAZING or SS_HORIZON for t_next */
+  int next_sign;     /**< stick: +1 next event at +ur, -1 at -ur */
   int have_next;
   double next_horizon; /**< local horizon the search for t_next used */
 } ss_sim;
@@ -371,32 +371,34 @@ SS_API void ss_sim_advance(ss_sim *s, double t);
 
 /** What a simulation request asks for; zero-initialise, then set. */
 typedef struct ss_sim_opts {
-  double t0;               /**< start time (usually 0) */
-  double t_end;            /**< stop at this absolute time, > t0 */
-  size_t stop_after;       /**< if > 0: stop at the stop_after-th event */
-  int record_events;       /**< store the events in the result */
-  size_t n_samples;        /**< evenly spaced samples over [sample_from, sample_to] */
+  double t0;         /**< start time (usually 0) */
+  double t_end;      /**< stop at this absolute time, > t0 */
+  size_t stop_after; /**< if > 0: stop at the stop_after-th event */
+  int record_events; /**< store the events in the result */
+  size_t n_samples;  /**< evenly spaced samples over [sample_from, sample_to] */
   double sample_from, sample_to;
-  const double *sample_times; /**< or explicit times, ascending (n_sample_times) */
+  const double
+      *sample_times; /**< or explicit times, ascending (n_sample_times) */
   size_t n_sample_times;
-  size_t max_events;       /**< limit: more events than this is SS_ELIMIT_EVENTS (0: none) */
-  size_t max_samples;      /**< limit on samples (0: none) */
-  double max_seconds;      /**< CPU/wall budget in seconds (0: none) */
+  size_t max_events;  /**< limit: more events than this is SS_ELIMIT_EVENTS (0:
+                         none) */
+  size_t max_samples; /**< limit on samples (0: none) */
+  double max_seconds; /**< CPU/wall budget in seconds (0: none) */
 } ss_sim_opts;
 
 /** The result of ss_simulate(); release with ss_sim_result_free(). */
 typedef struct ss_sim_result {
-  double t;            /**< final time */
-  ss_mode mode;        /**< final mode */
-  double x[4];         /**< final state */
-  size_t n_events;     /**< events that happened */
-  size_t n_grazing;    /**< of which tangencies */
-  ss_event *events;    /**< the events if record_events, else NULL */
+  double t;         /**< final time */
+  ss_mode mode;     /**< final mode */
+  double x[4];      /**< final state */
+  size_t n_events;  /**< events that happened */
+  size_t n_grazing; /**< of which tangencies */
+  ss_event *events; /**< the events if record_events, else NULL */
   size_t n_samples;
-  double *st;          /**< sample times */
-  double *sx;          /**< samples, 4 per time: x1, x2, x1', x2' */
-  unsigned char *smode;/**< mode at each sample */
-  int perpetual;       /**< ended in a slip that can never end */
+  double *st;           /**< sample times */
+  double *sx;           /**< samples, 4 per time: x1, x2, x1', x2' */
+  unsigned char *smode; /**< mode at each sample */
+  int perpetual;        /**< ended in a slip that can never end */
 } ss_sim_result;
 
 /**
@@ -465,48 +467,49 @@ typedef struct ss_orbit {
   ss_mode modes[SS_MAX_PHASES];
   double durations[SS_MAX_PHASES];
   double period;
-  int n_turns;   /**< passes through Sigma0 per period (period-k: k) */
-  double z0[4];  /**< start (stick -> slip point) in z = x - (d0, 0) */
-  double x0[4];  /**< the same in x */
+  int n_turns;  /**< passes through Sigma0 per period (period-k: k) */
+  double z0[4]; /**< start (stick -> slip point) in z = x - (d0, 0) */
+  double x0[4]; /**< the same in x */
   /* Margins of the constraints of section 5, from the certified finder: */
-  ss_margin slip_below;   /**< slip: min of V - x2' at interior maxima */
-  ss_margin over_above;   /**< overshoot: min of x2' - V at interior minima */
-  ss_margin stick_upper;  /**< stick: min of ur - chi(x2-x1) at interior maxima */
-  ss_margin stick_lower;  /**< stick: min of ur + chi(x2-x1) over the phase */
-  ss_margin switching;    /**< at phase ends: how far the mode rule holds,
-                               e.g. -ur - chi(x2-x1) for (3.2) */
-  ss_margin transversal;  /**< min slope of the switching function at the
-                               phase ends (0 would be grazing) */
-  ss_margin min_margin;   /**< the smallest of the value margins above */
-  double residual;        /**< max |F| of the orbit equations at the root */
-  double closure;         /**< max |P^k(s) - s| by simulation */
+  ss_margin slip_below; /**< slip: min of V - x2' at interior maxima */
+  ss_margin over_above; /**< overshoot: min of x2' - V at interior minima */
+  ss_margin
+      stick_upper; /**< stick: min of ur - chi(x2-x1) at interior maxima */
+  ss_margin stick_lower; /**< stick: min of ur + chi(x2-x1) over the phase */
+  ss_margin switching;   /**< at phase ends: how far the mode rule holds,
+                              e.g. -ur - chi(x2-x1) for (3.2) */
+  ss_margin transversal; /**< min slope of the switching function at the
+                              phase ends (0 would be grazing) */
+  ss_margin min_margin;  /**< the smallest of the value margins above */
+  double residual;       /**< max |F| of the orbit equations at the root */
+  double closure;        /**< max |P^k(s) - s| by simulation */
   ss_stab stab;
-  int iterations;         /**< Newton iterations of the final solve */
-  int source;             /**< 0 guess, 1 simulation, 2 duration grid,
-                               3 Poincare-map Newton */
+  int iterations; /**< Newton iterations of the final solve */
+  int source;     /**< 0 guess, 1 simulation, 2 duration grid,
+                       3 Poincare-map Newton */
 } ss_orbit;
 
 /** Options of ss_orbit_find(); zero-initialise for the defaults. */
 typedef struct ss_orbit_opts {
-  unsigned kinds;       /**< mask of ss_orbit_kind; 0 means all */
-  int n_guess;          /**< > 0: start from this guess only */
+  unsigned kinds;                     /**< mask of ss_orbit_kind; 0 means all */
+  int n_guess;                        /**< > 0: start from this guess only */
   ss_mode guess_modes[SS_MAX_PHASES]; /**< its sequence (default: by kinds) */
   double guess[SS_MAX_PHASES];        /**< its durations */
-  int max_period;       /**< largest k for period-k orbits (default 4) */
-  int effort;           /**< 1 coarse, 2 default, 3 fine search */
-  int no_fd;            /**< skip the finite-difference Jacobian */
-  double max_seconds;   /**< time budget (0: none) */
+  int max_period;     /**< largest k for period-k orbits (default 4) */
+  int effort;         /**< 1 coarse, 2 default, 3 fine search */
+  int no_fd;          /**< skip the finite-difference Jacobian */
+  double max_seconds; /**< time budget (0: none) */
 } ss_orbit_opts;
 
 /** What the search did. */
 typedef struct ss_orbit_report {
-  int simulations;    /**< simulations to an attractor */
-  int newton_starts;  /**< Newton solves started (durations and map) */
-  int roots;          /**< converged roots */
-  int infeasible;     /**< roots rejected as physically inadmissible */
-  int duplicates;     /**< roots already found */
-  int truncated;      /**< more orbits than room in the output */
-  char reason[256];   /**< why nothing was found, or the closest rejection */
+  int simulations;   /**< simulations to an attractor */
+  int newton_starts; /**< Newton solves started (durations and map) */
+  int roots;         /**< converged roots */
+  int infeasible;    /**< roots rejected as physically inadmissible */
+  int duplicates;    /**< roots already found */
+  int truncated;     /**< more orbits than room in the output */
+  char reason[256];  /**< why nothing was found, or the closest rejection */
 } ss_orbit_report;
 
 /**

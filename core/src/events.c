@@ -182,8 +182,8 @@ static double polish(const ss_trig *g, const bounds *b, double lo, double hi,
       t = 0.5 * (lo + hi);
       continue;
     }
-    if (v[1] > 0 && b->M2 / (2 * v[1]) * step * step <=
-                        0.5 * DBL_EPSILON * fabs(tn))
+    if (v[1] > 0 &&
+        b->M2 / (2 * v[1]) * step * step <= 0.5 * DBL_EPSILON * fabs(tn))
       return tn;
     t = tn;
   }

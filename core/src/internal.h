@@ -22,9 +22,10 @@ void ss__modal(const ss_model *m, const double zb[4], double q[2],
 /* The switching function of @a mode from the anchor state x (local time):
  * slip:      g = x2' - V          (must stay < 0)
  * overshoot: g = V - x2'          (must stay < 0)
- * stick:     g = chi(x2-x1) - ur  (sign = +1) or -ur - chi(x2-x1) (sign = -1) */
-void ss__switching(const ss_model *m, ss_mode mode, int sign,
-                   const double x[4], ss_trig *g);
+ * stick:     g = chi(x2-x1) - ur  (sign = +1) or -ur - chi(x2-x1) (sign = -1)
+ */
+void ss__switching(const ss_model *m, ss_mode mode, int sign, const double x[4],
+                   ss_trig *g);
 
 /* Error-free sum of two doubles (Knuth's TwoSum). */
 static inline void ss__two_sum(double a, double b, double *s, double *e) {

@@ -78,8 +78,9 @@ int ss_model_init(ss_model *m, const ss_params *p, ss_diag *d) {
   m->d0[1] = p->us / (chi * (1 - chi));
   /* Parameters that are each in range can still be too extreme together
    * for double precision (chi eta overflowing, d0 beyond DBL_MAX). */
-  double all[] = {m->lam[0], m->lam[1], m->phiinv[0][0], m->phiinv[0][1],
-                  m->phiinv[1][0], m->phiinv[1][1], m->d0[0], m->d0[1]};
+  double all[] = {m->lam[0],       m->lam[1],       m->phiinv[0][0],
+                  m->phiinv[0][1], m->phiinv[1][0], m->phiinv[1][1],
+                  m->d0[0],        m->d0[1]};
   for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
     if (!isfinite(all[i]))
       return ss__fail(d, SS_EDOMAIN, "eta", p->eta,
@@ -193,6 +194,7 @@ void ss_transition(const ss_model *m, ss_mode mode, double t, double A[16],
   if (mode == SS_MODE_STICK) {
     /* Gamma(t) of (2.6), with z2' = V carried as the fourth coordinate. */
     double chi = m->p.chi, co = cos(t), si = sin(t);
+    /* clang-format off */
     if (A) {
       double G[16] = {co,  chi * (1 - co), si, chi * (t - si),
                       0,   1,              0,  t,
@@ -207,6 +209,7 @@ void ss_transition(const ss_model *m, ss_mode mode, double t, double A[16],
                       0,   0,        0,   0};
       memcpy(dA, G, sizeof G);
     }
+    /* clang-format on */
     if (c)
       memset(c, 0, 4 * sizeof *c);
     if (dc)
@@ -253,8 +256,8 @@ void ss_transition(const ss_model *m, ss_mode mode, double t, double A[16],
   }
 }
 
-void ss__switching(const ss_model *m, ss_mode mode, int sign,
-                   const double x[4], ss_trig *g) {
+void ss__switching(const ss_model *m, ss_mode mode, int sign, const double x[4],
+                   ss_trig *g) {
   memset(g, 0, sizeof *g);
   if (mode == SS_MODE_STICK) {
     /* chi (x2 - x1) = chi ((1 - chi)(x2 + V t) - a cos t - b sin t). */

@@ -98,8 +98,7 @@ static int oeq_eval(const oeq *q, const double *tau, double z0[4], double *F,
   const ss_params *p = &q->m->p;
   double A[MAXP][16], c[MAXP][4], dA[MAXP][16], dc[MAXP][4];
   double P[MAXP + 1][16], qv[MAXP + 1][4];
-  static const double I4[16] = {1, 0, 0, 0, 0, 1, 0, 0,
-                                0, 0, 1, 0, 0, 0, 0, 1};
+  static const double I4[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
   for (int k = 0; k < n; k++)
     ss_transition(q->m, q->modes[k], tau[k], A[k], c[k], dA[k], dc[k]);
   memcpy(P[0], I4, sizeof I4);
@@ -227,8 +226,8 @@ static int solve_durations(const oeq *q, double *tau, double z0[4],
   gsl_ctx ctx = {q, 0};
   gsl_multiroot_function_fdf fdf = {gf, gdf, gfdf, (size_t)n, &ctx};
   gsl_vector_view xv = gsl_vector_view_array(tau, (size_t)n);
-  gsl_multiroot_fdfsolver *s =
-      gsl_multiroot_fdfsolver_alloc(gsl_multiroot_fdfsolver_hybridsj, (size_t)n);
+  gsl_multiroot_fdfsolver *s = gsl_multiroot_fdfsolver_alloc(
+      gsl_multiroot_fdfsolver_hybridsj, (size_t)n);
   int rc = SS_ENOCONV, it = 0, status;
   double F[MAXP], J[MAXP * MAXP], x[MAXP];
   if (!s)
@@ -352,8 +351,8 @@ static void record_max(void *vp, double t, double g) {
   margin_set(c->mg, -g, c->phase, t);
 }
 
-static void check_fail(ss_diag *d, const char *fmt, int k, ss_mode m,
-                       double a, double b) {
+static void check_fail(ss_diag *d, const char *fmt, int k, ss_mode m, double a,
+                       double b) {
   char where[32];
   snprintf(where, sizeof where, "phase %d (%s)", k, ss_mode_name(m));
   ss__fail(d, SS_INFEASIBLE, where, a, fmt, k, ss_mode_name(m), a, b);
@@ -382,8 +381,8 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
                       "phase %d (%s) has a non-positive duration %.6g", k,
                       ss_mode_name(o->modes[k]), o->durations[k]);
     o->period += o->durations[k];
-    if (o->modes[k] == SS_MODE_STICK && (k + 1 == n ||
-                                         o->modes[k + 1] == SS_MODE_SLIP))
+    if (o->modes[k] == SS_MODE_STICK &&
+        (k + 1 == n || o->modes[k + 1] == SS_MODE_SLIP))
       o->n_turns++;
   }
   ss_z_to_x(m, o->z0, o->x0);
@@ -391,8 +390,8 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
     return SS_EINVAL;
   for (int k = 0; k < n; k++) {
     double tau = o->durations[k], xs[4];
-    ss_mode mode = o->modes[k], want = k + 1 < n ? o->modes[k + 1]
-                                                 : SS_MODE_SLIP;
+    ss_mode mode = o->modes[k],
+            want = k + 1 < n ? o->modes[k + 1] : SS_MODE_SLIP;
     double slack = 1e-7 * (1 + tau);
     ss_event ev;
     memcpy(xs, sim.x, sizeof xs);

@@ -20,8 +20,8 @@
 #include "internal.h"
 
 #define SS_TWO_PI 6.283185307179586476925287
-#define MAP_EVENTS 64     /* events allowed for one return to Sigma0 */
-#define SETTLE_TURNS 80   /* returns simulated from each starting point */
+#define MAP_EVENTS 64   /* events allowed for one return to Sigma0 */
+#define SETTLE_TURNS 80 /* returns simulated from each starting point */
 #define MAP_NEWTON_ITERS 30
 
 typedef struct collect {
@@ -58,8 +58,7 @@ static int same_orbit(const ss_model *m, const ss_orbit *a, const ss_orbit *b,
                      1e-6 * (1 + a->period);
       double z[4];
       ss_x_to_z(m, x, z);
-      if (seq_ok && fabs(z[0] - a->z0[0]) < tol &&
-          fabs(z[2] - a->z0[2]) < tol)
+      if (seq_ok && fabs(z[0] - a->z0[0]) < tol && fabs(z[2] - a->z0[2]) < tol)
         return 1;
     }
     ss_flow(m, b->modes[r], b->durations[r], x, x);
@@ -109,8 +108,7 @@ static int map_newton(collect *c, double s[2], int k, ss_mode *modes,
   for (int it = 0; it < MAP_NEWTON_ITERS; it++) {
     double out[2], z0[4];
     ss_stab st;
-    if (ss_poincare(c->m, s, k, (size_t)(MAP_EVENTS * k), out, modes, dur,
-                    np))
+    if (ss_poincare(c->m, s, k, (size_t)(MAP_EVENTS * k), out, modes, dur, np))
       return -1;
     double g0 = out[0] - s[0], g1 = out[1] - s[1];
     if (fabs(g0) + fabs(g1) < 1e-12 * c->scale)
@@ -153,8 +151,8 @@ static void from_simulation(collect *c, const double seed[2], int max_k) {
   if (np < 2 * max_k + 1)
     return;
   for (int k = 1; k <= max_k; k++) {
-    double e = fabs(pts[np][0] - pts[np - k][0]) +
-               fabs(pts[np][1] - pts[np - k][1]);
+    double e =
+        fabs(pts[np][0] - pts[np - k][0]) + fabs(pts[np][1] - pts[np - k][1]);
     if (e < 1e-3 * c->scale) {
       double s[2] = {pts[np][0], pts[np][1]}, dur[SS_MAX_PHASES];
       ss_mode modes[SS_MAX_PHASES];

@@ -75,8 +75,7 @@ static int sim_find(ss_sim *s, double H) {
   ss_trig g;
   double t;
   int rc;
-  if (s->have_next &&
-      (s->next_status != SS_HORIZON || H <= s->next_horizon))
+  if (s->have_next && (s->next_status != SS_HORIZON || H <= s->next_horizon))
     return SS_OK;
   s->have_next = 1;
   s->next_horizon = H;
@@ -341,8 +340,8 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
       break;
     if (rc) {
       ss__fail(d, rc, ss_mode_name(s.mode), ss_sim_time(&s),
-               "event search failed in %s at t = %.17g",
-               ss_mode_name(s.mode), ss_sim_time(&s));
+               "event search failed in %s at t = %.17g", ss_mode_name(s.mode),
+               ss_sim_time(&s));
       goto partial;
     }
     if (o->max_events && r->n_events >= o->max_events) {

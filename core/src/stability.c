@@ -131,8 +131,8 @@ int ss_stability(const ss_model *m, int n, const ss_mode *modes,
   st->jac[1][0] = D[2][0];
   st->jac[1][1] = D[2][1];
   eig2(st->jac, st->eig_re, st->eig_im);
-  st->spectral_radius =
-      fmax(hypot(st->eig_re[0], st->eig_im[0]), hypot(st->eig_re[1], st->eig_im[1]));
+  st->spectral_radius = fmax(hypot(st->eig_re[0], st->eig_im[0]),
+                             hypot(st->eig_re[1], st->eig_im[1]));
   st->stable = st->spectral_radius < 1;
   st->jac_diff = NAN;
   if (no_fd)
@@ -146,10 +146,10 @@ int ss_stability(const ss_model *m, int n, const ss_mode *modes,
     memcpy(sm, s0, sizeof sm);
     sp[j] += h;
     sm[j] -= h;
-    int r1 = ss_poincare(m, sp, turns, 64 * (size_t)(n + 1), op, NULL, NULL,
-                         NULL);
-    int r2 = ss_poincare(m, sm, turns, 64 * (size_t)(n + 1), om, NULL, NULL,
-                         NULL);
+    int r1 =
+        ss_poincare(m, sp, turns, 64 * (size_t)(n + 1), op, NULL, NULL, NULL);
+    int r2 =
+        ss_poincare(m, sm, turns, 64 * (size_t)(n + 1), om, NULL, NULL, NULL);
     if (r1 || r2) {
       st->jac_fd[0][j] = st->jac_fd[1][j] = NAN;
       continue;

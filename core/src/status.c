@@ -11,8 +11,8 @@
 
 const char *ss_strerror(int status) {
   switch (status) {
-#define SS_STATUS_MSG(name, value, msg) \
-  case value:                           \
+#define SS_STATUS_MSG(name, value, msg)                                        \
+  case value:                                                                  \
     return msg;
     SS_STATUS_MAP(SS_STATUS_MSG)
 #undef SS_STATUS_MSG
@@ -23,8 +23,8 @@ const char *ss_strerror(int status) {
 
 const char *ss_status_name(int status) {
   switch (status) {
-#define SS_STATUS_NAME(name, value, msg) \
-  case value:                            \
+#define SS_STATUS_NAME(name, value, msg)                                       \
+  case value:                                                                  \
     return #name;
     SS_STATUS_MAP(SS_STATUS_NAME)
 #undef SS_STATUS_NAME

@@ -183,8 +183,9 @@ static void test_battery(void) {
   double maxerr = 0;
   for (int trial = 0; trial < 400; trial++) {
     ss_trig g = {0};
-#define RND() ((seed = seed * 6364136223846793005UL + 1442695040888963407UL), \
-               (double)(seed >> 11) / 9007199254740992.0)
+#define RND()                                                                  \
+  ((seed = seed * 6364136223846793005UL + 1442695040888963407UL),              \
+   (double)(seed >> 11) / 9007199254740992.0)
     g.n = 1 + (int)(RND() * 3);
     double amp = 0;
     for (int k = 0; k < g.n; k++) {

@@ -93,7 +93,8 @@ static void slip_taylor(const ss_model *m, const double x[4], long double t,
   d[1][1] = x[3];
   for (int k = 2; k < 6; k++) {
     d[k][0] = -d[k - 2][0] + chi * d[k - 2][1];
-    d[k][1] = -chi * eta * (d[k - 2][1] - d[k - 2][0]) + (k == 2 ? eta * us : 0);
+    d[k][1] =
+        -chi * eta * (d[k - 2][1] - d[k - 2][0]) + (k == 2 ? eta * us : 0);
   }
   for (int i = 0; i < 2; i++) {
     long double p = 0, v = 0, f = 1;
@@ -142,7 +143,8 @@ static void test_short_phases(void) {
   ASSERT_EQ_INT(ss_sim_init(&s, &m, 0, xs, NULL), SS_OK);
   ASSERT_EQ_INT(s.mode, SS_MODE_STICK);
   ASSERT_EQ_INT(ss_sim_next_event(&s, 10, &ev), SS_OK);
-  /* f(t) = f0 + f' t + f'' t^2/2 with f'' = chi x1'' ... = -chi (chi x2 - x1) */
+  /* f(t) = f0 + f' t + f'' t^2/2 with f'' = chi x1'' ... = -chi (chi x2 - x1)
+   */
   double f0 = chi * (xs[1] - xs[0]), f2 = -chi * (chi * xs[1] - xs[0]);
   double troot = (-fd + sqrt(fd * fd - 2 * f2 * (f0 - ur))) / f2;
   if (f2 == 0)
@@ -179,8 +181,8 @@ static void test_slip_overshoot_slip(void) {
       ref_event rev[8];
       double xe[4];
       int me;
-      long n = ref_simulate(&rp, 0, x0, REF_SLIP, e2.t + 1e-3, &ro, rev, 8, xe,
-                            &me);
+      long n =
+          ref_simulate(&rp, 0, x0, REF_SLIP, e2.t + 1e-3, &ro, rev, 8, xe, &me);
       ASSERT_TRUE(n >= 2);
       ASSERT_EQ_INT(rev[0].to, REF_OVERSHOOT);
       ASSERT_EQ_INT(rev[1].to, REF_SLIP);
@@ -213,9 +215,8 @@ static void test_edges(void) {
     ss_model m;
     ASSERT_EQ_INT(ss_model_init(&m, &cases[c].p, NULL), SS_OK);
     /* a state a few friction lengths from equilibrium, moving */
-    double L = fmax(m.p.ur, m.p.V), z0[4] = {2 * L, -1.5 * L, 0.3 * m.p.V,
-                                            -0.7 * m.p.V},
-           x0[4];
+    double L = fmax(m.p.ur, m.p.V),
+           z0[4] = {2 * L, -1.5 * L, 0.3 * m.p.V, -0.7 * m.p.V}, x0[4];
     ss_z_to_x(&m, z0, x0);
     double tmax = 40 / sqrt(m.lam[1]) + 40;
     ss_sim_opts o;

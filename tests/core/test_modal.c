@@ -13,10 +13,8 @@
 static const ss_params PAPER = {0.2, 4.0, 0.0724, 0.6178, 1.0};
 
 static const ss_params SETS[] = {
-    {0.2, 4.0, 0.0724, 0.6178, 1.0},
-    {0.5, 1.0, 0.1, 0.3, 0.7},
-    {0.05, 20.0, 0.02, 0.5, 2.0},
-    {0.9, 0.1, 0.3, 0.4, 0.2},
+    {0.2, 4.0, 0.0724, 0.6178, 1.0}, {0.5, 1.0, 0.1, 0.3, 0.7},
+    {0.05, 20.0, 0.02, 0.5, 2.0},    {0.9, 0.1, 0.3, 0.4, 0.2},
     {1e-3, 1e3, 0.01, 0.05, 1.0},
 };
 
@@ -29,10 +27,10 @@ static void test_params(void) {
     ss_params p;
     const char *where;
   } bad[] = {
-      {{0, 4, 0.07, 0.6, 1}, "chi"},       {{1, 4, 0.07, 0.6, 1}, "chi"},
-      {{NAN, 4, 0.07, 0.6, 1}, "chi"},     {{0.2, 0, 0.07, 0.6, 1}, "eta"},
-      {{0.2, 4, 0.07, 0.6, 0}, "V"},       {{0.2, 4, 0.6, 0.6, 1}, "us"},
-      {{0.2, 4, -0.1, 0.6, 1}, "us"},      {{0.2, 4, 0.07, INFINITY, 1}, "ur"},
+      {{0, 4, 0.07, 0.6, 1}, "chi"},   {{1, 4, 0.07, 0.6, 1}, "chi"},
+      {{NAN, 4, 0.07, 0.6, 1}, "chi"}, {{0.2, 0, 0.07, 0.6, 1}, "eta"},
+      {{0.2, 4, 0.07, 0.6, 0}, "V"},   {{0.2, 4, 0.6, 0.6, 1}, "us"},
+      {{0.2, 4, -0.1, 0.6, 1}, "us"},  {{0.2, 4, 0.07, INFINITY, 1}, "ur"},
       {{0.2, 4, 0.07, 0.6, -1}, "V"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
@@ -44,8 +42,8 @@ static void test_params(void) {
   /* each parameter in range, together too extreme for doubles */
   {
     ss_model m;
-    ss_params big = {0.5, 1e300, 0.1, 0.2, 1}, tiny = {1e-300, 1e-300, 0.1,
-                                                       0.2, 1};
+    ss_params big = {0.5, 1e300, 0.1, 0.2, 1},
+              tiny = {1e-300, 1e-300, 0.1, 0.2, 1};
     ss_diag_clear(&d);
     ASSERT_EQ_INT(ss_model_init(&m, &big, &d), SS_EDOMAIN);
     ASSERT_TRUE(strstr(d.text, "too extreme") != NULL);

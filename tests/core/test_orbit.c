@@ -22,8 +22,8 @@ static double ref_closure(const ss_model *m, const ss_orbit *o) {
   ref_event ev[64];
   double xe[4];
   int me;
-  long n = ref_simulate(&rp, 0, o->x0, REF_SLIP, o->period, &ro, ev, 64, xe,
-                        &me);
+  long n =
+      ref_simulate(&rp, 0, o->x0, REF_SLIP, o->period, &ro, ev, 64, xe, &me);
   /* the last event is the return to Sigma0, at the period (up to the
    * reference's accuracy it may fall just before or after t = period) */
   double err = 0, t = 0;
@@ -106,9 +106,8 @@ static void test_paper(void) {
   ASSERT_TRUE(g.iterations <= 10);
   /* the stability function on the returned orbit agrees */
   ss_stab st;
-  ASSERT_EQ_INT(ss_stability(&m, 3, ov->modes, ov->durations, ov->z0, 1, 0,
-                             &st),
-                SS_OK);
+  ASSERT_EQ_INT(
+      ss_stability(&m, 3, ov->modes, ov->durations, ov->z0, 1, 0, &st), SS_OK);
   ASSERT_NEAR(st.spectral_radius, ov->stab.spectral_radius, 1e-14);
   ASSERT_TRUE(st.jac_diff < 1e-6);
 }

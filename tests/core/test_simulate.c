@@ -120,8 +120,8 @@ static void test_battery(void) {
           n_o2s++;
       }
       if (!ok)
-        printf("battery: set %zu state %d: %ld reference events, %zu here\n",
-               s, k, n, r.n_events);
+        printf("battery: set %zu state %d: %ld reference events, %zu here\n", s,
+               k, n, r.n_events);
       agree += ok;
       ss_sim_result_free(&r);
     }

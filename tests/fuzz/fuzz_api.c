@@ -2,8 +2,8 @@
  * fuzz_api.c: the request decoder and the endpoints on arbitrary bytes.
  *
  * Every input, for every computing endpoint, must give a 200, 400 or 422
- * whose body is valid JSON (so with no NaN or Infinity), within small compute limits;
- * anything else aborts.  Built as a libFuzzer target with clang
+ * whose body is valid JSON (so with no NaN or Infinity), within small compute
+ * limits; anything else aborts.  Built as a libFuzzer target with clang
  * (-DSTICKSLIP_FUZZ=ON) and, with replay.c, as an ordinary test that runs
  * the stored corpus (tests/fuzz/corpus).
  */

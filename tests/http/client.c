@@ -172,9 +172,11 @@ char *daemon_log(const daemon_proc *d) {
   return b;
 }
 
-int daemon_stop(daemon_proc *d) {
+int daemon_stop(daemon_proc *d) { return daemon_stop_with(d, SIGTERM); }
+
+int daemon_stop_with(daemon_proc *d, int sig) {
   int st;
-  kill(d->pid, SIGTERM);
+  kill(d->pid, sig);
   if (waitpid(d->pid, &st, 0) != d->pid)
     return -1;
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;

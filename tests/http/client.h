@@ -11,8 +11,8 @@
 
 typedef struct http_resp {
   int status;
-  char *raw;     /* whole response, NUL-terminated */
-  char *body;    /* into raw */
+  char *raw;  /* whole response, NUL-terminated */
+  char *body; /* into raw */
   char ctype[96];
   char retry_after[16];
   char allow[32];
@@ -40,5 +40,7 @@ char *daemon_log(const daemon_proc *d);
 int daemon_start(const char *bin, const char *const *args, daemon_proc *d);
 /* SIGTERM and wait; returns the exit status (or -1). */
 int daemon_stop(daemon_proc *d);
+/* The same with another signal (SIGINT). */
+int daemon_stop_with(daemon_proc *d, int sig);
 
 #endif

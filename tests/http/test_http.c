@@ -23,7 +23,8 @@
 static const char *BIN;
 static int PORT;
 
-#define PAPER "\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,\"V\":1}"
+#define PAPER                                                                  \
+  "\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,\"V\":1}"
 #define JSON "application/json"
 /* the stick -> slip point of the paper's orbit: events every few units */
 #define X0 "[1.2739277342427062,4.3629277342427093,-0.80748713672430694,1.0]"
@@ -143,9 +144,9 @@ static void test_endpoints(void) {
   ASSERT_TRUE(num(o, "/orbits/0/stability/jacobian_difference") < 1e-6);
   /* /stability on the orbit as /orbit returned it */
   json_t *body = json_object();
-  json_object_set_new(body, "params",
-                      json_deep_copy(json_object_get(
-                          json_object_get(o, "input"), "params")));
+  json_object_set_new(
+      body, "params",
+      json_deep_copy(json_object_get(json_object_get(o, "input"), "params")));
   json_object_set(body, "orbit",
                   json_array_get(json_object_get(o, "orbits"), 0));
   char *sb = json_dumps(body, JSON_COMPACT);
@@ -156,9 +157,9 @@ static void test_endpoints(void) {
   free(sb);
   /* /simulate from the orbit: one period returns to x0 */
   json_object_del(body, "orbit");
-  json_object_set(body, "orbit", json_array_get(json_object_get(o, "orbits"), 0));
-  json_object_set_new(body, "t_end",
-                      json_real(num(o, "/orbits/0/period")));
+  json_object_set(body, "orbit",
+                  json_array_get(json_object_get(o, "orbits"), 0));
+  json_object_set_new(body, "t_end", json_real(num(o, "/orbits/0/period")));
   json_object_set_new(body, "events", json_false());
   sb = json_dumps(body, JSON_COMPACT);
   json_t *sim = post("/simulate", sb, 200);
@@ -186,11 +187,11 @@ static void test_endpoints(void) {
            "\"samples\":50}",
            200);
   ASSERT_NEAR(num(o, "/orbits/0/period"), 10.2714298553536, 1e-9);
-  ASSERT_TRUE(json_array_size(json_object_get(
-                  json_object_get(json_array_get(json_object_get(o, "orbits"),
-                                                 0),
-                                  "samples"),
-                  "t")) == 50);
+  ASSERT_TRUE(
+      json_array_size(json_object_get(
+          json_object_get(json_array_get(json_object_get(o, "orbits"), 0),
+                          "samples"),
+          "t")) == 50);
   json_decref(o);
   /* physical units: omega = 2, so durations halve */
   o = post("/orbit",
@@ -213,9 +214,9 @@ static void test_endpoints(void) {
              "{" PAPER ",\"initial\":" X0 ",\"t_end\":20,"
              "\"samples\":{\"n\":11,\"from\":0,\"to\":20}}",
              200);
-  ASSERT_EQ_INT(json_array_size(json_object_get(
-                    json_object_get(sim, "samples"), "x1")),
-                11);
+  ASSERT_EQ_INT(
+      json_array_size(json_object_get(json_object_get(sim, "samples"), "x1")),
+      11);
   ASSERT_TRUE(json_array_size(json_object_get(sim, "events")) > 0);
   json_decref(sim);
   /* metrics count what happened */
@@ -244,7 +245,8 @@ static void test_bad_input(void) {
       {"Infinity literal", P, "{\"params\":{\"chi\":Infinity}}", 400, NULL},
       {"1e999", P, "{\"params\":{\"chi\":1e999}}", 400, NULL},
       {"string for number", P,
-       "{\"params\":{\"chi\":\"0.2\",\"eta\":4,\"us\":0.07,\"ur\":0.6,\"V\":1}}",
+       "{\"params\":{\"chi\":\"0.2\",\"eta\":4,\"us\":0.07,\"ur\":0.6,\"V\":1}"
+       "}",
        422, "/params/chi"},
       {"chi out of range", P,
        "{\"params\":{\"chi\":1.5,\"eta\":4,\"us\":0.07,\"ur\":0.6,\"V\":1}}",
@@ -264,24 +266,24 @@ static void test_bad_input(void) {
        "{\"params\":{\"chi\":0.2,\"chi\":0.3,\"eta\":4,\"us\":0.07,\"ur\":0.6,"
        "\"V\":1}}",
        400, NULL},
-      {"both params and physical", P,
-       "{" PAPER ",\"physical\":{\"m1\":1}}", 422, "/physical"},
+      {"both params and physical", P, "{" PAPER ",\"physical\":{\"m1\":1}}",
+       422, "/physical"},
       {"bad kind", P, "{" PAPER ",\"kind\":\"chaos\"}", 422, "/kind"},
       {"bad effort", P, "{" PAPER ",\"effort\":9}", 422, "/effort"},
       {"fractional count", P, "{" PAPER ",\"samples\":1.5}", 422, "/samples"},
       {"negative guess", P, "{" PAPER ",\"guess\":{\"durations\":[1,-1,1]}}",
        422, "/guess/durations"},
-      {"negative t_end", S, "{" PAPER ",\"initial\":" X0 ",\"t_end\":-5}",
-       422, "/t_end"},
-      {"absurd t_end", S, "{" PAPER ",\"initial\":" X0 ",\"t_end\":1e300}",
-       422, "/t_end"},
+      {"negative t_end", S, "{" PAPER ",\"initial\":" X0 ",\"t_end\":-5}", 422,
+       "/t_end"},
+      {"absurd t_end", S, "{" PAPER ",\"initial\":" X0 ",\"t_end\":1e300}", 422,
+       "/t_end"},
       {"absurd samples", S,
        "{" PAPER ",\"initial\":" X0 ",\"t_end\":5,\"samples\":{\"n\":"
        "1000000000}}",
        422, "/samples/n"},
       {"negative samples", S,
-       "{" PAPER ",\"initial\":" X0 ",\"t_end\":5,\"samples\":{\"n\":-3}}",
-       422, "/samples/n"},
+       "{" PAPER ",\"initial\":" X0 ",\"t_end\":5,\"samples\":{\"n\":-3}}", 422,
+       "/samples/n"},
       {"short initial", S, "{" PAPER ",\"initial\":[0,0,0],\"t_end\":5}", 422,
        "/initial"},
       {"missing t_end", S, "{" PAPER ",\"initial\":" X0 "}", 422, "/t_end"},
@@ -385,9 +387,19 @@ static double mono(void) {
  * admission control with 503 + Retry-After */
 static void test_concurrency(void) {
   daemon_proc d;
-  const char *args[] = {"--workers", "2", "--queue-timeout", "0.3",
-                        "--max-events", "100000000", "--max-horizon", "1e8",
-                        "--max-seconds", "60", "--drain", "60", NULL};
+  const char *args[] = {"--workers",
+                        "2",
+                        "--queue-timeout",
+                        "0.3",
+                        "--max-events",
+                        "100000000",
+                        "--max-horizon",
+                        "1e8",
+                        "--max-seconds",
+                        "60",
+                        "--drain",
+                        "60",
+                        NULL};
   ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
   pthread_t th[8];
   job jobs[8];
@@ -417,8 +429,8 @@ static void test_concurrency(void) {
     ok += jobs[i].status == 200;
     busy += jobs[i].status == 503;
   }
-  printf("concurrency: 8 long requests: %d answered 200, %d answered 503\n",
-         ok, busy);
+  printf("concurrency: 8 long requests: %d answered 200, %d answered 503\n", ok,
+         busy);
   ASSERT_EQ_INT(ok + busy, 8);
   ASSERT_TRUE(ok >= 2 && busy >= 1);
   /* 503 carries Retry-After */
@@ -521,9 +533,9 @@ static void test_spec_examples(void) {
     if (!post)
       continue;
     json_t *reqex = json_object_get(
-        json_object_get(json_object_get(json_object_get(post, "requestBody"),
-                                        "content"),
-                        "application/json"),
+        json_object_get(
+            json_object_get(json_object_get(post, "requestBody"), "content"),
+            "application/json"),
         "examples");
     const char *name;
     json_t *ex;
@@ -612,7 +624,8 @@ static void test_connection_limits(void) {
   ASSERT_EQ_INT(http_do(d.port, "GET", "/health", NULL, NULL, &r), 0);
   ASSERT_EQ_INT(r.status, 200);
   http_free(&r);
-  ASSERT_EQ_INT(daemon_stop(&d), 0);
+  /* EVIDENCE: issue 4.4 SIGINT stops the daemon as SIGTERM does */
+  ASSERT_EQ_INT(daemon_stop_with(&d, SIGINT), 0);
   unlink(d.log_path);
 }
 

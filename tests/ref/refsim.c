@@ -49,7 +49,8 @@ static int jac(double t, const double y[], double *dfdy, double dfdt[],
 }
 
 /* Switching functions, negative inside the mode. */
-static double gfun(const ref_params *p, int mode, int which, const double y[4]) {
+static double gfun(const ref_params *p, int mode, int which,
+                   const double y[4]) {
   if (mode == REF_SLIP)
     return y[3] - p->V;
   if (mode == REF_OVERSHOOT)
@@ -111,8 +112,8 @@ static int next_mode(const ref_params *p, int mode, int which,
 }
 
 long ref_simulate(const ref_params *p, double t0, const double x0[4], int mode0,
-                  double t_end, const ref_opts *o, ref_event *ev,
-                  size_t max_ev, double x_end[4], int *mode_end) {
+                  double t_end, const ref_opts *o, ref_event *ev, size_t max_ev,
+                  double x_end[4], int *mode_end) {
   sys_ctx c = {p, mode0};
   gsl_odeiv2_system sys = {rhs, jac, 4, &c};
   double y[4], t = t0, h = 1e-3;

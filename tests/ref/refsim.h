@@ -41,7 +41,7 @@ int ref_flow(const ref_params *p, int mode, double t, double x[4],
  * Returns the number of events, or -1 on a GSL failure; final state into
  * x_end and *mode_end. */
 long ref_simulate(const ref_params *p, double t0, const double x0[4], int mode0,
-                  double t_end, const ref_opts *o, ref_event *ev,
-                  size_t max_ev, double x_end[4], int *mode_end);
+                  double t_end, const ref_opts *o, ref_event *ev, size_t max_ev,
+                  double x_end[4], int *mode_end);
 
 #endif
