@@ -344,12 +344,15 @@ static json_t *stab_json(const ss_stab *st, double omega) {
   return s;
 }
 
-static json_t *margin_json(const ss_margin *mg) {
+/* A margin: its value stays dimensionless (velocities in units of V's,
+ * forces as chi (x2 - x1), in units of k1 + k2), its place t in the time unit
+ * of the request. */
+static json_t *margin_json(const ss_margin *mg, double omega) {
   json_t *o = json_object();
   api__set(o, "value", api__real(mg->value));
   if (mg->phase >= 0) {
     api__set(o, "phase", json_integer(mg->phase));
-    api__set(o, "t", api__real(mg->t));
+    api__set(o, "t", api__real(mg->t / omega));
   }
   return o;
 }
@@ -372,14 +375,19 @@ static json_t *orbit_json(const ss_model *m, const ss_orbit *o, double omega,
   ss_to_physical(omega, 0, o->x0, &t, x);
   api__set(j, "z0", api__vec4(z));
   api__set(j, "x0", api__vec4(x));
-  api__set(mg, "slip_below_V", margin_json(&o->slip_below));
-  api__set(mg, "overshoot_above_V", margin_json(&o->over_above));
-  api__set(mg, "stick_below_ur", margin_json(&o->stick_upper));
-  api__set(mg, "stick_above_minus_ur", margin_json(&o->stick_lower));
-  api__set(mg, "switching", margin_json(&o->switching));
-  api__set(mg, "transversality", margin_json(&o->transversal));
-  api__set(mg, "min", margin_json(&o->min_margin));
-  api__set(mg, "units", json_string("dimensionless"));
+  api__set(mg, "slip_below_V", margin_json(&o->slip_below, omega));
+  api__set(mg, "overshoot_above_V", margin_json(&o->over_above, omega));
+  api__set(mg, "stick_below_ur", margin_json(&o->stick_upper, omega));
+  api__set(mg, "stick_above_minus_ur", margin_json(&o->stick_lower, omega));
+  api__set(mg, "switching", margin_json(&o->switching, omega));
+  api__set(mg, "transversality", margin_json(&o->transversal, omega));
+  api__set(mg, "min", margin_json(&o->min_margin, omega));
+  api__set(
+      mg, "units",
+      json_string(
+          omega == 1
+              ? "dimensionless"
+              : "values dimensionless; t in the time unit of the request"));
   api__set(j, "margins", mg);
   api__set(j, "residual", api__real(o->residual));
   api__set(j, "closure", api__real(o->closure));
