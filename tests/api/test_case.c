@@ -1,0 +1,119 @@
+/*
+ * test_case.c: one codec case, without HTTP.  A case is a directory
+ * tests/api/cases/<endpoint>-<name>/ with request.json (the body, sent as
+ * is) and expect.json: {"status": N, "body": {...}}.  The expected body is
+ * matched as a subset: every key it names must be in the answer with an
+ * equal value (numbers to a relative 1e-9); arrays must match in length and
+ * element by element.  Usage: test_case DIR
+ */
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "stickslip.h"
+#include "stickslip_api.h"
+
+static char *slurp(const char *path, size_t *len) {
+  FILE *f = fopen(path, "rb");
+  if (!f)
+    return NULL;
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  char *b = malloc((size_t)n + 1);
+  if (fread(b, 1, (size_t)n, f) != (size_t)n) {
+    fclose(f);
+    free(b);
+    return NULL;
+  }
+  fclose(f);
+  b[n] = 0;
+  *len = (size_t)n;
+  return b;
+}
+
+static int subset(json_t *want, json_t *got, char *path, size_t n) {
+  size_t pl = strlen(path);
+  if (json_is_number(want) && json_is_number(got)) {
+    double a = json_number_value(want), b = json_number_value(got);
+    return fabs(a - b) <= 1e-9 * fmax(1.0, fmax(fabs(a), fabs(b)));
+  }
+  if (json_typeof(want) != json_typeof(got))
+    return 0;
+  if (json_is_object(want)) {
+    const char *k;
+    json_t *v;
+    json_object_foreach(want, k, v) {
+      snprintf(path + pl, n - pl, "/%s", k);
+      json_t *g = json_object_get(got, k);
+      if (!g || !subset(v, g, path, n))
+        return 0;
+      path[pl] = 0;
+    }
+    return 1;
+  }
+  if (json_is_array(want)) {
+    if (json_array_size(want) != json_array_size(got))
+      return 0;
+    for (size_t i = 0; i < json_array_size(want); i++) {
+      snprintf(path + pl, n - pl, "/%zu", i);
+      if (!subset(json_array_get(want, i), json_array_get(got, i), path, n))
+        return 0;
+      path[pl] = 0;
+    }
+    return 1;
+  }
+  return json_equal(want, got);
+}
+
+int main(int argc, char **argv) {
+  char path[4096], where[512] = "";
+  size_t len, elen;
+  if (argc < 2)
+    return 2;
+  ss_gsl_quiet();
+  const char *base = strrchr(argv[1], '/');
+  base = base ? base + 1 : argv[1];
+  api_endpoint ep;
+  if (!strncmp(base, "orbit-", 6))
+    ep = API_ORBIT;
+  else if (!strncmp(base, "simulate-", 9))
+    ep = API_SIMULATE;
+  else if (!strncmp(base, "stability-", 10))
+    ep = API_STABILITY;
+  else {
+    fprintf(stderr, "%s: the name must start with an endpoint\n", base);
+    return 2;
+  }
+  snprintf(path, sizeof path, "%s/request.json", argv[1]);
+  char *req = slurp(path, &len);
+  snprintf(path, sizeof path, "%s/expect.json", argv[1]);
+  char *exp = slurp(path, &elen);
+  json_t *want = exp ? json_loads(exp, 0, NULL) : NULL;
+  if (!req || !want) {
+    fprintf(stderr, "%s: missing request.json or expect.json\n", base);
+    return 2;
+  }
+  api_limits lim;
+  api_limits_default(&lim);
+  api_response r;
+  int st = api_handle(ep, req, len, &lim, &r);
+  json_t *got = json_loads(r.body, 0, NULL);
+  int ok =
+      got && st == (int)json_integer_value(json_object_get(want, "status"));
+  if (ok)
+    ok = subset(json_object_get(want, "body"), got, where, sizeof where);
+  printf("%s: status %d, %s%s%s\n1 checks, %d failures\n", base, st,
+         ok ? "as expected" : "differs", ok ? "" : " at ", ok ? "" : where,
+         !ok);
+  if (!ok)
+    fprintf(stderr, "answer: %.2000s\n", r.body);
+  json_decref(got);
+  json_decref(want);
+  api_response_free(&r);
+  free(req);
+  free(exp);
+  return ok ? 0 : 1;
+}
