@@ -399,17 +399,22 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
     ss_trig g;
     max_ctx mc = {NULL, k};
     if (mode == SS_MODE_STICK) {
-      mc.mg = &o->stick_upper;
-      ss__switching(m, mode, 1, xs, &g);
-      interior_maxima(&g, tau, record_max, &mc);
-      ss__switching(m, mode, -1, xs, &g);
-      mc.mg = &o->stick_lower;
-      interior_maxima(&g, tau, record_max, &mc);
-      double v0[1], v1[1];
-      ss_trig_eval(&g, 0, 0, v0);
-      ss_trig_eval(&g, tau, 0, v1);
-      margin_set(&o->stick_lower, -v0[0], k, 0);
-      margin_set(&o->stick_lower, -v1[0], k, tau);
+      /* (2.7) on both sides: ur - chi(x2-x1) and ur + chi(x2-x1).  The side
+       * the stick ends on is zero at the end by construction, so only its
+       * interior maxima count; the other side counts at both ends too. */
+      int end_sign = want == SS_MODE_OVERSHOOT ? -1 : 1;
+      for (int side = 1; side >= -1; side -= 2) {
+        mc.mg = side > 0 ? &o->stick_upper : &o->stick_lower;
+        ss__switching(m, mode, side, xs, &g);
+        interior_maxima(&g, tau, record_max, &mc);
+        if (side != end_sign) {
+          double v0[1], v1[1];
+          ss_trig_eval(&g, 0, 0, v0);
+          ss_trig_eval(&g, tau, 0, v1);
+          margin_set(mc.mg, -v0[0], k, 0);
+          margin_set(mc.mg, -v1[0], k, tau);
+        }
+      }
     } else {
       mc.mg = mode == SS_MODE_SLIP ? &o->slip_below : &o->over_above;
       ss__switching(m, mode, 0, xs, &g);

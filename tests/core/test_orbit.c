@@ -176,6 +176,45 @@ static void test_other_sets(void) {
          total, stable_ss, unstable, period2);
 }
 
+/* A sweep as a batch client would run it: every orbit found closes under
+ * simulation, has non-negative margins, and its analytic Jacobian agrees
+ * with the finite-difference one relative to its size. */
+static void test_sweep(void) {
+  const double chis[] = {0.1, 0.2, 0.5, 0.8}, etas[] = {0.5, 1, 4, 10};
+  int total = 0, sets = 0, empty = 0;
+  double worst_rel = 0, worst_closure = 0;
+  for (int a = 0; a < 4; a++)
+    for (int b = 0; b < 4; b++)
+      for (int u = 1; u <= 19; u += 3) {
+        ss_params p = {chis[a], etas[b], 0.0724, 0.1 * u, 1};
+        ss_model m;
+        ss_orbit out[MAXO];
+        int n = 0;
+        ss_orbit_opts o = {0};
+        ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+        ASSERT_EQ_INT(ss_orbit_find(&m, &o, out, MAXO, &n, NULL, NULL), SS_OK);
+        sets++;
+        empty += n == 0;
+        for (int i = 0; i < n; i++) {
+          const ss_orbit *q = &out[i];
+          double size = 1;
+          for (int r = 0; r < 2; r++)
+            for (int c = 0; c < 2; c++)
+              size = fmax(size, fabs(q->stab.jac[r][c]));
+          double rel = q->stab.jac_diff / size;
+          ASSERT_TRUE(rel < 1e-5);
+          ASSERT_TRUE(q->closure < 1e-9 * size);
+          ASSERT_TRUE(q->min_margin.value >= 0);
+          worst_rel = fmax(worst_rel, rel);
+          worst_closure = fmax(worst_closure, q->closure);
+          total++;
+        }
+      }
+  printf("sweep: %d parameter sets, %d orbits (%d sets with none), worst "
+         "relative |J - J_fd| %.2g, worst closure %.2g\n",
+         sets, total, empty, worst_rel, worst_closure);
+}
+
 /* Bad input is refused with a reason. */
 static void test_bad_input(void) {
   ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
@@ -198,6 +237,7 @@ int main(void) {
   test_paper();
   test_violates_32();
   test_other_sets();
+  test_sweep();
   test_bad_input();
   TEST_DONE();
 }
