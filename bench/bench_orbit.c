@@ -115,7 +115,7 @@ int main(int argc, char **argv) {
       {"find all orbits with no guess, with finite-difference Jacobians",
        find_all, 51, ""},
       {"stability, analytic Jacobian and eigenvalues", stab_analytic, 2001, ""},
-      {"stability with the finite-difference check (4 simulated maps)", stab_fd,
+      {"stability with the finite-difference check (8 simulated maps)", stab_fd,
        RUNS, ""},
       {"simulate 1000 periods (3000 events), final state only", sim_1000, 21,
        "< 1 ms (1 us per period)"},
