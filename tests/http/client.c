@@ -39,10 +39,9 @@ static void header(const char *raw, const char *name, char *out, size_t n) {
   }
 }
 
-int http_raw(int port, const char *req, size_t len, http_resp *r) {
+int http_connect(int port) {
   struct sockaddr_in a;
   int fd = socket(AF_INET, SOCK_STREAM, 0);
-  memset(r, 0, sizeof *r);
   if (fd < 0)
     return -1;
   memset(&a, 0, sizeof a);
@@ -53,6 +52,14 @@ int http_raw(int port, const char *req, size_t len, http_resp *r) {
     close(fd);
     return -1;
   }
+  return fd;
+}
+
+int http_raw(int port, const char *req, size_t len, http_resp *r) {
+  memset(r, 0, sizeof *r);
+  int fd = http_connect(port);
+  if (fd < 0)
+    return -1;
   /* send what the server takes; it may close early (413) */
   for (size_t off = 0; off < len;) {
     ssize_t k = send(fd, req + off, len - off, MSG_NOSIGNAL);

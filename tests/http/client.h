@@ -18,6 +18,8 @@ typedef struct http_resp {
   char allow[32];
 } http_resp;
 
+/* A connected socket to 127.0.0.1:port, or -1. */
+int http_connect(int port);
 /* Send @a req (len bytes) to 127.0.0.1:port, read to EOF.  0 on success. */
 int http_raw(int port, const char *req, size_t len, http_resp *r);
 /* A request with Connection: close. method, path, content type (or NULL),

@@ -579,20 +579,6 @@ static void test_spec_examples(void) {
   json_decref(spec);
 }
 
-static int open_idle(int port) {
-  struct sockaddr_in a;
-  int fd = socket(AF_INET, SOCK_STREAM, 0);
-  memset(&a, 0, sizeof a);
-  a.sin_family = AF_INET;
-  a.sin_port = htons((uint16_t)port);
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  if (connect(fd, (struct sockaddr *)&a, sizeof a) != 0) {
-    close(fd);
-    return -1;
-  }
-  return fd;
-}
-
 /* Has the server closed this connection?  Waits up to ms. */
 static int closed_by_server(int fd, int ms) {
   struct pollfd p = {fd, POLLIN, 0};
@@ -608,7 +594,7 @@ static void test_connection_limits(void) {
   const char *args[] = {"--per-ip-connections", "2", "--connection-timeout",
                         "1", NULL};
   ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
-  int a = open_idle(d.port), b = open_idle(d.port);
+  int a = http_connect(d.port), b = http_connect(d.port);
   ASSERT_TRUE(a >= 0 && b >= 0);
   usleep(100000);
   /* a third connection from the same address is dropped at once */
