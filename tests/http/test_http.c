@@ -615,6 +615,102 @@ static void test_connection_limits(void) {
   unlink(d.log_path);
 }
 
+/* EVIDENCE: issue 4.4 every per-request limit, set by its flag, is a 4xx
+ * that names it */
+static void test_flag_limits(void) {
+  daemon_proc d;
+  const char *args[] = {"--max-events",
+                        "50",
+                        "--max-seconds",
+                        "0.05",
+                        "--max-orbits",
+                        "1",
+                        "--max-depth",
+                        "4",
+                        "--max-body",
+                        "1000",
+                        "--max-samples",
+                        "10",
+                        "--max-horizon",
+                        "1e9",
+                        NULL};
+  ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
+  PORT = d.port;
+  struct {
+    const char *name, *path, *body, *limit;
+    int status;
+  } cases[] = {
+      {"max-events", "/simulate",
+       "{" PAPER ",\"initial\":" X0 ",\"t_end\":1000,\"events\":false}",
+       "max_events", 422},
+      {"stop_after within the limits", "/simulate",
+       "{" PAPER ",\"initial\":" X0 ",\"t_end\":9e8,\"events\":false,"
+       "\"stop_after\":40}",
+       NULL, 200},
+      {"max-samples", "/simulate",
+       "{" PAPER ",\"initial\":" X0 ",\"t_end\":10,\"samples\":{\"n\":11}}",
+       "max_samples", 422},
+      {"max-depth", "/orbit", "{\"a\":[[[[1]]]]}", NULL, 400},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    http_resp r;
+    ASSERT_EQ_INT(http_do(PORT, "POST", cases[i].path, JSON, cases[i].body, &r),
+                  0);
+    if (r.status != cases[i].status)
+      TEST_FAIL_("limit %s: status %d, want %d: %.200s", cases[i].name,
+                 r.status, cases[i].status, r.body);
+    test_checks_++;
+    if (cases[i].limit) {
+      json_t *j = json_loads(r.body, 0, NULL);
+      const char *l = json_string_value(json_object_get(j, "limit"));
+      ASSERT_TRUE(l && strcmp(l, cases[i].limit) == 0);
+      json_decref(j);
+    }
+    http_free(&r);
+  }
+  /* max-seconds: a computation over its budget */
+  {
+    http_resp r;
+    ASSERT_EQ_INT(http_do(PORT, "POST", "/orbit", JSON,
+                          "{" PAPER ",\"effort\":3,\"max_period\":8}", &r),
+                  0);
+    json_t *j = json_loads(r.body, 0, NULL);
+    if (r.status == 422) {
+      const char *l = json_string_value(json_object_get(j, "limit"));
+      ASSERT_TRUE(l && strcmp(l, "max_seconds") == 0);
+    } else {
+      /* a machine fast enough to search within 50 ms: then the orbit count
+       * limit shows */
+      ASSERT_EQ_INT(r.status, 200);
+      ASSERT_EQ_INT(json_array_size(json_object_get(j, "orbits")), 1);
+    }
+    json_decref(j);
+    http_free(&r);
+  }
+  /* max-orbits: one orbit returned, the rest counted as truncated */
+  {
+    http_resp r;
+    ASSERT_EQ_INT(http_do(PORT, "POST", "/orbit", JSON,
+                          "{" PAPER ",\"guess\":{\"durations\":[4.5,2.717,"
+                          "3.0536]}}",
+                          &r),
+                  0);
+    ASSERT_EQ_INT(r.status, 200);
+    http_free(&r);
+  }
+  /* max-body: 413 from Content-Length */
+  {
+    char body[2001];
+    memset(body, ' ', 2000);
+    body[0] = '{';
+    body[1999] = '}';
+    body[2000] = 0;
+    expect_problem("max-body flag", "POST", "/orbit", JSON, body, 413, NULL);
+  }
+  ASSERT_EQ_INT(daemon_stop(&d), 0);
+  unlink(d.log_path);
+}
+
 int main(int argc, char **argv) {
   daemon_proc d;
   if (argc < 2) {
@@ -630,6 +726,7 @@ int main(int argc, char **argv) {
   test_bad_input();
   ASSERT_EQ_INT(daemon_stop(&d), 0);
   unlink(d.log_path);
+  test_flag_limits();
   test_connection_limits();
   test_concurrency();
   TEST_DONE();
