@@ -43,4 +43,10 @@ double ss__now(void); /* monotonic seconds */
  * zero, returns 0 and *dir is its sign. */
 int ss__trig_at_zero(const ss_trig *g, double t0, int *dir);
 
+/* The duration equations of orbit.c at tau: the start z0, the residuals F
+ * (n) and, if J != NULL, their analytic Jacobian (n x n, row-major).  For
+ * the tests.  Returns SS_OK, SS_EINVAL or SS_ESINGULAR. */
+int ss__orbit_equations(const ss_model *m, int n, const ss_mode *modes,
+                        const double *tau, double z0[4], double *F, double *J);
+
 #endif

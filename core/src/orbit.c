@@ -172,6 +172,14 @@ static int oeq_eval(const oeq *q, const double *tau, double z0[4], double *F,
   return SS_OK;
 }
 
+int ss__orbit_equations(const ss_model *m, int n, const ss_mode *modes,
+                        const double *tau, double z0[4], double *F, double *J) {
+  oeq q;
+  if (oeq_init(&q, m, n, modes))
+    return SS_EINVAL;
+  return oeq_eval(&q, tau, z0, F, J);
+}
+
 /* GSL callbacks */
 typedef struct gsl_ctx {
   const oeq *q;

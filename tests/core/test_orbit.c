@@ -8,6 +8,7 @@
 
 #include <gsl/gsl_errno.h>
 
+#include "internal.h"
 #include "refsim.h"
 #include "stickslip.h"
 #include "test.h"
@@ -215,6 +216,53 @@ static void test_sweep(void) {
          sets, total, empty, worst_rel, worst_closure);
 }
 
+/* EVIDENCE: issue 3.1 the analytic Jacobian of the duration equations
+ * against central differences, off the solution, for the overshoot
+ * sequence and a five-phase one. */
+static void test_equation_jacobian(void) {
+  ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
+  ss_model m;
+  ss_model_init(&m, &p, NULL);
+  const struct {
+    int n;
+    ss_mode modes[5];
+    double tau[5];
+  } cases[] = {
+      {3, {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK}, {4.3, 2.9, 3.2}},
+      {2, {SS_MODE_SLIP, SS_MODE_STICK}, {3.1, 2.6}},
+      {5,
+       {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK, SS_MODE_SLIP,
+        SS_MODE_STICK},
+       {3.4, 2.0, 0.3, 3.5, 2.7}},
+  };
+  double worst = 0;
+  for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+    int n = cases[c].n;
+    double z0[4], F[5], J[25], Fp[5], Fm[5];
+    ASSERT_EQ_INT(
+        ss__orbit_equations(&m, n, cases[c].modes, cases[c].tau, z0, F, J),
+        SS_OK);
+    for (int j = 0; j < n; j++) {
+      double tp[5], tm[5], h = 1e-6;
+      memcpy(tp, cases[c].tau, sizeof tp);
+      memcpy(tm, cases[c].tau, sizeof tm);
+      tp[j] += h;
+      tm[j] -= h;
+      ss__orbit_equations(&m, n, cases[c].modes, tp, z0, Fp, NULL);
+      ss__orbit_equations(&m, n, cases[c].modes, tm, z0, Fm, NULL);
+      for (int i = 0; i < n; i++) {
+        double fd = (Fp[i] - Fm[i]) / (2 * h);
+        double e = fabs(fd - J[n * i + j]) / fmax(1.0, fabs(fd));
+        worst = fmax(worst, e);
+        ASSERT_TRUE(e < 1e-7);
+      }
+    }
+  }
+  printf("duration equations: analytic vs central-difference Jacobian, worst "
+         "relative difference %.2g\n",
+         worst);
+}
+
 /* Bad input is refused with a reason. */
 static void test_bad_input(void) {
   ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
@@ -238,6 +286,7 @@ int main(void) {
   test_violates_32();
   test_other_sets();
   test_sweep();
+  test_equation_jacobian();
   test_bad_input();
   TEST_DONE();
 }
