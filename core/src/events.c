@@ -33,26 +33,25 @@
 #define MAX_STEPS 2000000
 
 void ss_trig_eval(const ss_trig *g, double t, int order, double *out) {
-  out[0] = g->c0 + g->c1 * t;
-  if (order >= 1)
-    out[1] = g->c1;
-  if (order >= 2)
-    out[2] = 0;
-  if (order >= 3)
-    out[3] = 0;
+  /* All derivatives are accumulated without branches (a few multiplies
+   * cost less than the tests); only the ones asked for are stored. */
+  double v0 = g->c0 + g->c1 * t, v1 = g->c1, v2 = 0, v3 = 0;
   for (int k = 0; k < g->n; k++) {
     double w = g->w[k], c = cos(w * t), s = sin(w * t);
-    double A = g->a[k] * c + g->b[k] * s;
-    out[0] += A;
-    if (order >= 1) {
-      double B = g->b[k] * c - g->a[k] * s;
-      out[1] += w * B;
-      if (order >= 2)
-        out[2] -= w * w * A;
-      if (order >= 3)
-        out[3] -= w * w * w * B;
-    }
+    double A = g->a[k] * c + g->b[k] * s, B = g->b[k] * c - g->a[k] * s;
+    double w2 = w * w;
+    v0 += A;
+    v1 += w * B;
+    v2 -= w2 * A;
+    v3 -= w2 * w * B;
   }
+  out[0] = v0;
+  if (order >= 1)
+    out[1] = v1;
+  if (order >= 2)
+    out[2] = v2;
+  if (order >= 3)
+    out[3] = v3;
 }
 
 typedef struct bounds {
