@@ -30,7 +30,6 @@ typedef struct collect {
   int max, n;
   double scale;
   ss_orbit_report *rep;
-  int no_fd;
   double t_start, budget;
 } collect;
 
@@ -86,7 +85,8 @@ static void try_solve(collect *c, int n, const ss_mode *modes,
   ss_diag d;
   ss_diag_clear(&d);
   c->rep->newton_starts++;
-  int rc = ss_orbit_solve(c->m, n, modes, tau, c->no_fd, &o, &d);
+  /* the finite-difference check is made once, on the orbits returned */
+  int rc = ss_orbit_solve(c->m, n, modes, tau, 1, &o, &d);
   if (rc == SS_OK) {
     c->rep->roots++;
     o.source = source;
@@ -192,7 +192,6 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
   c.n = 0;
   c.scale = fmax(p->V, (p->ur - p->us) / p->chi);
   c.rep = rep;
-  c.no_fd = opts->no_fd;
   c.t_start = ss__now();
   c.budget = opts->max_seconds;
   *n_out = 0;
@@ -323,6 +322,12 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
         *b = t;
       }
     }
+  /* the finite-difference check of the Jacobian, for the orbits returned */
+  for (int i = 0; i < c.n && !opts->no_fd; i++) {
+    ss_orbit *q = &c.out[i];
+    ss_stability(m, q->n_phases, q->modes, q->durations, q->z0, q->n_turns, 0,
+                 &q->stab);
+  }
   *n_out = c.n;
   if (c.n == 0 && !rep->reason[0])
     snprintf(rep->reason, sizeof rep->reason,
