@@ -63,6 +63,11 @@ typedef struct api_params {
   double omega; /* 1 when dimensionless */
 } api_params;
 
+/* The field names of "params" and "physical", in the order of the fields of
+ * ss_params and ss_physical (NULL-terminated); decode and echo share them. */
+extern const char *const API_PARAM_KEYS[];
+extern const char *const API_PHYS_KEYS[];
+
 int api__params(const json_t *root, api_params *ap, api_err *e);
 json_t *api__params_echo(const api_params *ap);
 

@@ -172,9 +172,9 @@ void api__from_diag(api_err *e, int rc, const ss_diag *d,
               d->text[0] ? d->text : ss_strerror(rc));
 }
 
-static const char *const PARAM_KEYS[] = {"chi", "eta", "us", "ur", "V", NULL};
-static const char *const PHYS_KEYS[] = {"m1", "m2", "k1", "k2",
-                                        "Fs", "Fr", "v0", NULL};
+const char *const API_PARAM_KEYS[] = {"chi", "eta", "us", "ur", "V", NULL};
+const char *const API_PHYS_KEYS[] = {"m1", "m2", "k1", "k2",
+                                     "Fs", "Fr", "v0", NULL};
 
 int api__params(const json_t *root, api_params *ap, api_err *e) {
   json_t *pp = NULL, *ph = NULL;
@@ -195,10 +195,10 @@ int api__params(const json_t *root, api_params *ap, api_err *e) {
   ss_diag_clear(&d);
   if (a == 0) {
     double *dst[] = {&ap->p.chi, &ap->p.eta, &ap->p.us, &ap->p.ur, &ap->p.V};
-    if (api__keys(pp, "/params", PARAM_KEYS, e))
+    if (api__keys(pp, "/params", API_PARAM_KEYS, e))
       return -1;
     for (int i = 0; i < 5; i++)
-      if (api__number(pp, "/params", PARAM_KEYS[i], 1, dst[i], e))
+      if (api__number(pp, "/params", API_PARAM_KEYS[i], 1, dst[i], e))
         return -1;
     int rc = ss_params_check(&ap->p, &d);
     if (rc) {
@@ -209,10 +209,10 @@ int api__params(const json_t *root, api_params *ap, api_err *e) {
   }
   double *dst[] = {&ap->ph.m1, &ap->ph.m2, &ap->ph.k1, &ap->ph.k2,
                    &ap->ph.Fs, &ap->ph.Fr, &ap->ph.v0};
-  if (api__keys(ph, "/physical", PHYS_KEYS, e))
+  if (api__keys(ph, "/physical", API_PHYS_KEYS, e))
     return -1;
   for (int i = 0; i < 7; i++)
-    if (api__number(ph, "/physical", PHYS_KEYS[i], 1, dst[i], e))
+    if (api__number(ph, "/physical", API_PHYS_KEYS[i], 1, dst[i], e))
       return -1;
   int rc = ss_params_from_physical(&ap->ph, &ap->p, &ap->omega, &d);
   if (rc) {

@@ -27,21 +27,16 @@ int api__set(json_t *obj, const char *key, json_t *v) {
 json_t *api__params_echo(const api_params *ap) {
   json_t *o = json_object();
   json_t *p = json_object();
-  api__set(p, "chi", api__real(ap->p.chi));
-  api__set(p, "eta", api__real(ap->p.eta));
-  api__set(p, "us", api__real(ap->p.us));
-  api__set(p, "ur", api__real(ap->p.ur));
-  api__set(p, "V", api__real(ap->p.V));
+  const double pv[] = {ap->p.chi, ap->p.eta, ap->p.us, ap->p.ur, ap->p.V};
+  for (int i = 0; API_PARAM_KEYS[i]; i++)
+    api__set(p, API_PARAM_KEYS[i], api__real(pv[i]));
   api__set(o, "params", p);
   if (ap->physical) {
     json_t *ph = json_object();
-    api__set(ph, "m1", api__real(ap->ph.m1));
-    api__set(ph, "m2", api__real(ap->ph.m2));
-    api__set(ph, "k1", api__real(ap->ph.k1));
-    api__set(ph, "k2", api__real(ap->ph.k2));
-    api__set(ph, "Fs", api__real(ap->ph.Fs));
-    api__set(ph, "Fr", api__real(ap->ph.Fr));
-    api__set(ph, "v0", api__real(ap->ph.v0));
+    const double hv[] = {ap->ph.m1, ap->ph.m2, ap->ph.k1, ap->ph.k2,
+                         ap->ph.Fs, ap->ph.Fr, ap->ph.v0};
+    for (int i = 0; API_PHYS_KEYS[i]; i++)
+      api__set(ph, API_PHYS_KEYS[i], api__real(hv[i]));
     api__set(o, "physical", ph);
     api__set(o, "omega", api__real(ap->omega));
   }
