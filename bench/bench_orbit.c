@@ -40,7 +40,7 @@ static double find_from_guess(int fd) {
   o.guess[0] = 4.5;
   o.guess[1] = 2.717;
   o.guess[2] = 3.0536;
-  o.no_fd = !fd;
+  o.difference_check = fd;
   ss_orbit_find(&M, &o, out, 4, &n, NULL, NULL);
   return n ? out[0].period : 0;
 }
@@ -54,7 +54,6 @@ static double find_overshoot(void) {
   int n = 0;
   memset(&o, 0, sizeof o);
   o.kinds = SS_ORBIT_OVERSHOOT;
-  o.no_fd = 1;
   ss_orbit_find(&M, &o, out, 32, &n, NULL, NULL);
   return n;
 }
@@ -64,6 +63,7 @@ static double find_all(void) {
   ss_orbit out[32];
   int n = 0;
   memset(&o, 0, sizeof o);
+  o.difference_check = 1;
   ss_orbit_find(&M, &o, out, 32, &n, NULL, NULL);
   return n;
 }
@@ -72,13 +72,15 @@ static ss_orbit ORB;
 
 static double stab_analytic(void) {
   ss_stab st;
-  ss_stability(&M, 3, ORB.modes, ORB.durations, ORB.z0, 1, 1, &st);
+  ss_stab_opts so = {1, 0};
+  ss_stability(&M, 3, ORB.modes, ORB.durations, ORB.z0, &so, &st);
   return st.spectral_radius;
 }
 
 static double stab_fd(void) {
   ss_stab st;
-  ss_stability(&M, 3, ORB.modes, ORB.durations, ORB.z0, 1, 0, &st);
+  ss_stab_opts so = {1, 1};
+  ss_stability(&M, 3, ORB.modes, ORB.durations, ORB.z0, &so, &st);
   return st.spectral_radius;
 }
 
@@ -98,7 +100,7 @@ int main(int argc, char **argv) {
   double guess[3] = {4.5, 2.717, 3.0536};
   gsl_set_error_handler_off();
   ss_model_init(&M, &p, NULL);
-  ss_orbit_solve(&M, 3, modes, guess, 1, &ORB, NULL);
+  ss_orbit_solve(&M, 3, modes, guess, NULL, &ORB, NULL);
   struct {
     const char *what;
     job_fn fn;

@@ -421,7 +421,7 @@ int main(int argc, char **argv) {
   double guess[3] = {4.5, 2.717, 3.0536};
   gsl_set_error_handler_off();
   ss_model_init(&M, &p, NULL);
-  if (ss_orbit_solve(&M, 3, modes, guess, 1, &ORB, NULL) != SS_OK) {
+  if (ss_orbit_solve(&M, 3, modes, guess, NULL, &ORB, NULL) != SS_OK) {
     fprintf(stderr, "cannot solve the paper's orbit\n");
     return 1;
   }

@@ -27,8 +27,11 @@
  * SS_STATUS_MAP: zero is success, a positive value is information the caller
  * must read (for example SS_GRAZING), a negative value is a failure.  Details
  * go to an optional caller-owned ss_diag; pass NULL when they are not wanted.
- * The library never prints, exits or aborts; it turns GSL's abort-on-error
- * handler off for the calls it makes (see ss_gsl_quiet()).
+ * The library never prints, exits or aborts.  GSL's default error handler
+ * aborts, and GSL has one handler per process: the first ss_model_init()
+ * (every computation starts from a model) turns it off, unless the program
+ * installed a handler of its own before, which is then left in place (see
+ * ss_gsl_quiet()).
  *
  * Thread safety.  Every function is reentrant: it touches only its arguments.
  * Objects may be shared read-only between threads.
@@ -48,7 +51,23 @@ extern "C" {
 #define SS_API
 #endif
 
-#define SS_VERSION "0.1.0"
+/* The version: the one place it is written.  The build (CMakeLists.txt),
+ * the daemon and its OpenAPI document read it from here. */
+#define SS_VERSION_MAJOR 0
+#define SS_VERSION_MINOR 2
+#define SS_VERSION_PATCH 0
+#define SS_VERSION_HEX                                                         \
+  ((SS_VERSION_MAJOR << 16) | (SS_VERSION_MINOR << 8) | SS_VERSION_PATCH)
+#define SS_STR_(x) #x
+#define SS_STR(x) SS_STR_(x)
+/** "MAJOR.MINOR.PATCH" of this header. */
+#define SS_VERSION                                                             \
+  SS_STR(SS_VERSION_MAJOR)                                                     \
+  "." SS_STR(SS_VERSION_MINOR) "." SS_STR(SS_VERSION_PATCH)
+
+/** The version of the library linked, SS_VERSION of its build: a program
+ *  can compare it with the header it was compiled with. */
+SS_API const char *ss_version(void);
 
 /* ------------------------------------------------------------------------ */
 /* Status codes                                                              */
@@ -64,6 +83,7 @@ extern "C" {
   X(HORIZON, 2, "no event before the horizon")                                 \
   X(NEVER, 3, "the switching function can never reach zero")                   \
   X(INFEASIBLE, 4, "a root of the orbit equations that violates a constraint") \
+  X(ABOVE, 5, "the switching function is already positive at the start")       \
   X(EDOMAIN, -1, "parameter outside its domain")                               \
   X(EINVAL, -2, "invalid argument")                                            \
   X(ENOCONV, -3, "iteration did not converge")                                 \
@@ -99,7 +119,12 @@ typedef struct ss_diag {
 /** Reset @a d to "no error".  NULL is allowed. */
 SS_API void ss_diag_clear(ss_diag *d);
 
-/** Turn GSL's default abort-on-error handler off (idempotent, process-wide). */
+/**
+ * Turn GSL's default abort-on-error handler off, once per process, unless
+ * the program installed a handler of its own before (GSL has one handler
+ * per process).  ss_model_init() calls it; a program may call it earlier.
+ * Thread-safe (pthread_once).
+ */
 SS_API void ss_gsl_quiet(void);
 
 /* ------------------------------------------------------------------------ */
@@ -289,8 +314,10 @@ SS_API void ss_trig_eval(const ss_trig *g, double t, int order, double *out);
  * @param[out] t   the root or tangency; tmax on SS_HORIZON
  * @return SS_OK (crossing), SS_GRAZING (tangency), SS_HORIZON (g < 0 on
  *         (t0, tmax]), SS_NEVER (c1 <= 0 and c0 + c1 t0 + sum |terms| <
- *         -tol: g can never reach zero), SS_EINVAL (g positive at t0, bad
- * arguments). Thread-safe; allocates nothing.
+ *         -tol: g can never reach zero), SS_ABOVE (g is positive at t0
+ *         beyond tol: there is no first crossing from below), SS_EINVAL
+ *         (bad arguments: NULL, n outside 0..SS_TRIG_MAX, t0 not finite,
+ *         tmax not above t0).  Thread-safe; allocates nothing.
  */
 SS_API int ss_trig_first_root(const ss_trig *g, double t0, double tmax,
                               double *t);
@@ -314,39 +341,36 @@ typedef struct ss_event {
 } ss_event;
 
 /**
- * An event-driven simulation in progress.  The state is re-anchored at every
- * event, so within a phase it is the closed form from the last event: a long
- * run keeps machine precision.  Absolute time is kept as an unevaluated sum
- * t_hi + t_lo, so that event times stay accurate after 10^6 events.
- * Caller-allocated; fill with ss_sim_init(); no _free is needed.
+ * An event-driven simulation in progress (opaque).  The state is re-anchored
+ * at every event, so within a phase it is the closed form from the last
+ * event: a long run keeps machine precision.  Absolute time is kept as an
+ * unevaluated sum of two doubles, so that event times stay accurate after
+ * 10^6 events.  The model must outlive it.
  */
-typedef struct ss_sim {
-  const ss_model *m;
-  ss_mode mode;      /**< current mode */
-  double t_hi, t_lo; /**< absolute time of the anchor */
-  double x[4];       /**< state at the anchor */
-  int perpetual;     /**< the current slip can never end */
-  double t_next;     /**< local time of the next event (valid if have_next) */
-  int next_status;   /**< SS_OK, SS_GRAZING or SS_HORIZON for t_next */
-  int next_sign;     /**< stick: +1 next event at +ur, -1 at -ur */
-  int have_next;
-  double next_horizon; /**< local horizon the search for t_next used */
-} ss_sim;
+typedef struct ss_sim ss_sim;
 
 /**
  * Start a simulation at absolute time @a t0 from @a x0; the mode follows
- * ss_mode_of_state().  @return SS_OK or SS_EINVAL (non-finite input).
+ * ss_mode_of_state().
+ * @return the simulation (release with ss_sim_free()), or NULL with the
+ *         reason in @a d: SS_EINVAL (non-finite input) or SS_ENOMEM.
  */
-SS_API int ss_sim_init(ss_sim *s, const ss_model *m, double t0,
-                       const double x0[4], ss_diag *d);
+SS_API ss_sim *ss_sim_new(const ss_model *m, double t0, const double x0[4],
+                          ss_diag *d);
 
 /**
  * Start in a given @a mode (for example stick at the threshold).  The state
  * must be consistent with it: x2' = V for stick (forced exactly), x2' <= V
- * for slip, x2' >= V for overshoot.  @return SS_OK or SS_EINVAL.
+ * for slip, x2' >= V for overshoot.  NULL on error, as ss_sim_new().
  */
-SS_API int ss_sim_init_mode(ss_sim *s, const ss_model *m, double t0,
-                            const double x0[4], ss_mode mode, ss_diag *d);
+SS_API ss_sim *ss_sim_new_mode(const ss_model *m, double t0, const double x0[4],
+                               ss_mode mode, ss_diag *d);
+
+/** Release a simulation.  NULL-safe. */
+SS_API void ss_sim_free(ss_sim *s);
+
+/** The current mode. */
+SS_API ss_mode ss_sim_mode(const ss_sim *s);
 
 /** Current absolute time of the anchor (the last event or the start). */
 SS_API double ss_sim_time(const ss_sim *s);
@@ -443,6 +467,29 @@ SS_API const char *ss_orbit_kind_name(ss_orbit_kind k);
 /** The kind of a phase sequence (OVERSHOOT, STICKSLIP or OTHER). */
 SS_API ss_orbit_kind ss_orbit_kind_of(int n, const ss_mode *modes);
 
+/** How the search found an orbit. */
+typedef enum ss_orbit_source {
+  SS_SOURCE_GUESS = 0,         /**< from the caller's guess */
+  SS_SOURCE_SIMULATION = 1,    /**< simulation settled on it (an attractor) */
+  SS_SOURCE_DURATION_GRID = 2, /**< Newton on the durations from a grid */
+  SS_SOURCE_MAP_NEWTON = 3     /**< Newton on the Poincare map P^k */
+} ss_orbit_source;
+
+/** "guess", "simulation", "duration-grid", "poincare-newton"; NULL for
+ *  anything else. */
+SS_API const char *ss_orbit_source_name(ss_orbit_source s);
+
+/** Options of ss_stability() and ss_orbit_solve(); zero-initialise for the
+ *  defaults (or pass NULL). */
+typedef struct ss_stab_opts {
+  /** Passes through Sigma0 per period; 0: counted from the modes (a stick
+   *  followed by slip, or the last phase).  ss_orbit_solve() always counts. */
+  int turns;
+  /** Also the central-difference Jacobian of ss_poincare(), as a
+   *  cross-check of the analytic one (ss_stab.jac_fd, .jac_diff). */
+  int difference_check;
+} ss_stab_opts;
+
 /** How far a constraint is from being violated, and where. */
 typedef struct ss_margin {
   double value; /**< >= 0 when satisfied; INFINITY when it never binds */
@@ -484,9 +531,8 @@ typedef struct ss_orbit {
   double residual;       /**< max |F| of the orbit equations at the root */
   double closure;        /**< max |P^k(s) - s| by simulation */
   ss_stab stab;
-  int iterations; /**< Newton iterations of the final solve */
-  int source;     /**< 0 guess, 1 simulation, 2 duration grid,
-                       3 Poincare-map Newton */
+  int iterations;         /**< Newton iterations of the final solve */
+  ss_orbit_source source; /**< how the search found it */
 } ss_orbit;
 
 /** Options of ss_orbit_find(); zero-initialise for the defaults. */
@@ -495,9 +541,11 @@ typedef struct ss_orbit_opts {
   int n_guess;                        /**< > 0: start from this guess only */
   ss_mode guess_modes[SS_MAX_PHASES]; /**< its sequence (default: by kinds) */
   double guess[SS_MAX_PHASES];        /**< its durations */
-  int max_period;     /**< largest k for period-k orbits (default 4) */
-  int effort;         /**< 1 coarse, 2 default, 3 fine search */
-  int no_fd;          /**< skip the finite-difference Jacobian */
+  int max_period; /**< largest k for period-k orbits (default 4) */
+  int effort;     /**< 1 coarse, 2 default, 3 fine search */
+  /** Cross-check every returned orbit's Jacobian by central differences of
+   *  the Poincare map (ss_stab_opts.difference_check). */
+  int difference_check;
   double max_seconds; /**< time budget (0: none) */
 } ss_orbit_opts;
 
@@ -531,8 +579,21 @@ typedef struct ss_orbit_report {
  *         SS_ESINGULAR; SS_EINVAL.
  */
 SS_API int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
-                          const double *tau, int no_fd, ss_orbit *o,
-                          ss_diag *d);
+                          const double *tau, const ss_stab_opts *opts,
+                          ss_orbit *o, ss_diag *d);
+
+/**
+ * The duration equations of ss_orbit_solve() at the durations @a tau: the
+ * start @a z0 that the periodicity system (5.1) gives, the n residuals
+ * @a F (zero at an orbit), and, if @a J is not NULL, their analytic
+ * Jacobian with respect to the durations (n x n, row-major).  For callers
+ * that build their own solvers or continuation on these equations.
+ * @return SS_OK; SS_EINVAL (bad sequence or count); SS_ESINGULAR (the
+ *         periodicity system is singular at @a tau).
+ */
+SS_API int ss_orbit_equations(const ss_model *m, int n, const ss_mode *modes,
+                              const double *tau, double z0[4], double *F,
+                              double *J);
 
 /**
  * Check the orbit in @a o (modes, durations, z0 set) by simulation with the
@@ -581,12 +642,14 @@ SS_API int ss_poincare(const ss_model *m, const double s[2], int turns,
  *   dZ_{k+1} = (I - f_k n_k^T / (n_k . f_k)) A_k(tau_k) dZ_k,
  * (f_k the vector field at the end of phase k, n_k the gradient of its
  * switching function), started from dZ_0 = (x, x, v, 0) on Sigma0 (4.3);
- * unless @a no_fd, also the central-difference Jacobian of ss_poincare().
- * @return SS_OK or SS_ESINGULAR (a phase ends tangentially).
+ * with opts->difference_check, also the central-difference Jacobian of
+ * ss_poincare() over opts->turns returns.
+ * @param opts  may be NULL (turns counted, no difference check)
+ * @return SS_OK, SS_EINVAL or SS_ESINGULAR (a phase ends tangentially).
  */
 SS_API int ss_stability(const ss_model *m, int n, const ss_mode *modes,
-                        const double *tau, const double z0[4], int turns,
-                        int no_fd, ss_stab *st);
+                        const double *tau, const double z0[4],
+                        const ss_stab_opts *opts, ss_stab *st);
 
 #ifdef __cplusplus
 }

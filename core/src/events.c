@@ -250,7 +250,7 @@ int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
   }
   ss_trig_eval(g, t0, 3, v);
   if (v[0] > tol)
-    return SS_EINVAL;
+    return SS_ABOVE;
   if (v[0] >= -tol) {
     if (departure(&b, tol, v) > 0) {
       *t = t0;

@@ -43,10 +43,27 @@ double ss__now(void); /* monotonic seconds */
  * zero, returns 0 and *dir is its sign. */
 int ss__trig_at_zero(const ss_trig *g, double t0, int *dir);
 
-/* The duration equations of orbit.c at tau: the start z0, the residuals F
- * (n) and, if J != NULL, their analytic Jacobian (n x n, row-major).  For
- * the tests.  Returns SS_OK, SS_EINVAL or SS_ESINGULAR. */
-int ss__orbit_equations(const ss_model *m, int n, const ss_mode *modes,
-                        const double *tau, double z0[4], double *F, double *J);
+/* A simulation in progress (ss_sim of the header).  The core's own loops
+ * keep one on the stack, started with ss__sim_init(_mode), so that no
+ * allocation enters them. */
+struct ss_sim {
+  const ss_model *m;
+  ss_mode mode;      /* current mode */
+  double t_hi, t_lo; /* absolute time of the anchor, as a sum */
+  double x[4];       /* state at the anchor */
+  int perpetual;     /* the current slip can never end */
+  double t_next;     /* local time of the next event (if have_next) */
+  int next_status;   /* SS_OK, SS_GRAZING or SS_HORIZON for t_next */
+  int next_sign;     /* stick: +1 next event at +ur, -1 at -ur */
+  int have_next;
+  double next_horizon; /* local horizon the search for t_next used */
+};
+
+/* Start @a s at absolute time t0 from x0 in the mode of ss_mode_of_state(),
+ * or in @a mode; SS_OK or SS_EINVAL (with the reason in d). */
+int ss__sim_init(ss_sim *s, const ss_model *m, double t0, const double x0[4],
+                 ss_diag *d);
+int ss__sim_init_mode(ss_sim *s, const ss_model *m, double t0,
+                      const double x0[4], ss_mode mode, ss_diag *d);
 
 #endif

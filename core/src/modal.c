@@ -28,8 +28,9 @@ const char *ss_mode_name(ss_mode m) {
 }
 
 int ss_model_init(ss_model *m, const ss_params *p, ss_diag *d) {
-  int rc = ss_params_check(p, d);
   double chi, ce, s, disc, r, det;
+  ss_gsl_quiet(); /* every computation starts here: GSL must not abort */
+  int rc = ss_params_check(p, d);
   if (rc)
     return rc;
   memset(m, 0, sizeof *m);

@@ -35,6 +35,12 @@ const char *ss_orbit_kind_name(ss_orbit_kind k) {
   }
 }
 
+const char *ss_orbit_source_name(ss_orbit_source s) {
+  static const char *const names[] = {"guess", "simulation", "duration-grid",
+                                      "poincare-newton"};
+  return (unsigned)s < sizeof names / sizeof names[0] ? names[s] : NULL;
+}
+
 ss_orbit_kind ss_orbit_kind_of(int n, const ss_mode *modes) {
   if (n == 3 && modes[0] == SS_MODE_SLIP && modes[1] == SS_MODE_OVERSHOOT &&
       modes[2] == SS_MODE_STICK)
@@ -172,10 +178,10 @@ static int oeq_eval(const oeq *q, const double *tau, double z0[4], double *F,
   return SS_OK;
 }
 
-int ss__orbit_equations(const ss_model *m, int n, const ss_mode *modes,
-                        const double *tau, double z0[4], double *F, double *J) {
+int ss_orbit_equations(const ss_model *m, int n, const ss_mode *modes,
+                       const double *tau, double z0[4], double *F, double *J) {
   oeq q;
-  if (oeq_init(&q, m, n, modes))
+  if (!m || !modes || !tau || !z0 || !F || oeq_init(&q, m, n, modes))
     return SS_EINVAL;
   return oeq_eval(&q, tau, z0, F, J);
 }
@@ -394,7 +400,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
       o->n_turns++;
   }
   ss_z_to_x(m, o->z0, o->x0);
-  if (ss_sim_init_mode(&sim, m, 0, o->x0, SS_MODE_SLIP, d))
+  if (ss__sim_init_mode(&sim, m, 0, o->x0, SS_MODE_SLIP, d))
     return SS_EINVAL;
   for (int k = 0; k < n; k++) {
     double tau = o->durations[k], xs[4];
@@ -512,7 +518,8 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
 }
 
 int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
-                   const double *tau, int no_fd, ss_orbit *o, ss_diag *d) {
+                   const double *tau, const ss_stab_opts *opts, ss_orbit *o,
+                   ss_diag *d) {
   oeq q;
   double x[MAXP], z0[4] = {0, 0, 0, 0}, resid = INFINITY;
   int iters = 0, rc;
@@ -546,8 +553,8 @@ int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
   ss_z_to_x(m, z0, o->x0);
   if ((rc = ss_orbit_check(m, o, d)))
     return rc;
-  rc = ss_stability(m, n, o->modes, o->durations, o->z0, o->n_turns, no_fd,
-                    &o->stab);
+  ss_stab_opts so = {o->n_turns, opts && opts->difference_check};
+  rc = ss_stability(m, n, o->modes, o->durations, o->z0, &so, &o->stab);
   if (rc == SS_ESINGULAR)
     return ss__fail(d, SS_INFEASIBLE, "orbit", 0,
                     "a phase of the orbit ends tangentially (grazing)");

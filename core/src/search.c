@@ -80,13 +80,13 @@ static void add_orbit(collect *c, const ss_orbit *o) {
 
 /* Refine a candidate sequence and durations; keep it if feasible. */
 static void try_solve(collect *c, int n, const ss_mode *modes,
-                      const double *tau, int source) {
+                      const double *tau, ss_orbit_source source) {
   ss_orbit o;
   ss_diag d;
   ss_diag_clear(&d);
   c->rep->newton_starts++;
   /* the finite-difference check is made once, on the orbits returned */
-  int rc = ss_orbit_solve(c->m, n, modes, tau, 1, &o, &d);
+  int rc = ss_orbit_solve(c->m, n, modes, tau, NULL, &o, &d);
   if (rc == SS_OK) {
     c->rep->roots++;
     o.source = source;
@@ -117,7 +117,8 @@ static int map_newton(collect *c, double s[2], int k, ss_mode *modes,
     z0[1] = s[0] + (p->ur - p->us) / p->chi;
     z0[2] = s[1];
     z0[3] = p->V;
-    if (ss_stability(c->m, *np, modes, dur, z0, k, 1, &st))
+    ss_stab_opts so = {k, 0};
+    if (ss_stability(c->m, *np, modes, dur, z0, &so, &st))
       return -1;
     double a = st.jac[0][0] - 1, b = st.jac[0][1], cc = st.jac[1][0],
            d = st.jac[1][1] - 1, det = a * d - b * cc;
@@ -159,7 +160,7 @@ static void from_simulation(collect *c, const double seed[2], int max_k) {
       int n;
       c->rep->newton_starts++;
       if (map_newton(c, s, k, modes, dur, &n) == 0)
-        try_solve(c, n, modes, dur, 1);
+        try_solve(c, n, modes, dur, SS_SOURCE_SIMULATION);
       return;
     }
   }
@@ -218,10 +219,11 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
     ss_orbit o;
     ss_diag_clear(&dd);
     rep->newton_starts = 1;
-    int rc = ss_orbit_solve(m, n, modes, opts->guess, opts->no_fd, &o, &dd);
+    ss_stab_opts so = {0, opts->difference_check};
+    int rc = ss_orbit_solve(m, n, modes, opts->guess, &so, &o, &dd);
     if (rc == SS_OK) {
       rep->roots = 1;
-      o.source = 0;
+      o.source = SS_SOURCE_GUESS;
       add_orbit(&c, &o);
     } else {
       if (rc == SS_INFEASIBLE) {
@@ -268,7 +270,7 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
       for (int j = 0; j < b; j++)
         for (int k = 0; k < b && !over_budget(&c); k++) {
           double tau[3] = {ft[i] * T0, ft1[j] * T0, ft2[k] * SS_TWO_PI};
-          try_solve(&c, 3, modes, tau, 2);
+          try_solve(&c, 3, modes, tau, SS_SOURCE_DURATION_GRID);
         }
   }
   if ((kinds & SS_ORBIT_STICKSLIP) && !over_budget(&c)) {
@@ -279,7 +281,7 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
     for (int i = 0; i < a; i++)
       for (int k = 0; k < b && !over_budget(&c); k++) {
         double tau[2] = {ft[i] * T0, ft2[k] * SS_TWO_PI};
-        try_solve(&c, 2, modes, tau, 2);
+        try_solve(&c, 2, modes, tau, SS_SOURCE_DURATION_GRID);
       }
   }
   /* 3. Newton on P^k from the seeds */
@@ -302,7 +304,7 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
                 fabs(o1[0] - s[0]) + fabs(o1[1] - s[1]) < 1e-8 * c.scale)
               minimal = 0;
           if (minimal)
-            try_solve(&c, n, modes, dur, 3);
+            try_solve(&c, n, modes, dur, SS_SOURCE_MAP_NEWTON);
         }
       }
   }
@@ -323,10 +325,10 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
       }
     }
   /* the finite-difference check of the Jacobian, for the orbits returned */
-  for (int i = 0; i < c.n && !opts->no_fd; i++) {
+  for (int i = 0; i < c.n && opts->difference_check; i++) {
     ss_orbit *q = &c.out[i];
-    ss_stability(m, q->n_phases, q->modes, q->durations, q->z0, q->n_turns, 0,
-                 &q->stab);
+    ss_stab_opts so = {q->n_turns, 1};
+    ss_stability(m, q->n_phases, q->modes, q->durations, q->z0, &so, &q->stab);
   }
   *n_out = c.n;
   if (c.n == 0 && !rep->reason[0])

@@ -27,8 +27,8 @@ static int finite4(const double x[4]) {
   return isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2]) && isfinite(x[3]);
 }
 
-int ss_sim_init_mode(ss_sim *s, const ss_model *m, double t0,
-                     const double x0[4], ss_mode mode, ss_diag *d) {
+int ss__sim_init_mode(ss_sim *s, const ss_model *m, double t0,
+                      const double x0[4], ss_mode mode, ss_diag *d) {
   if (!s || !m || !x0)
     return ss__fail(d, SS_EINVAL, "initial", 0, "missing argument");
   if (!isfinite(t0))
@@ -56,13 +56,41 @@ int ss_sim_init_mode(ss_sim *s, const ss_model *m, double t0,
   return SS_OK;
 }
 
-int ss_sim_init(ss_sim *s, const ss_model *m, double t0, const double x0[4],
-                ss_diag *d) {
+int ss__sim_init(ss_sim *s, const ss_model *m, double t0, const double x0[4],
+                 ss_diag *d) {
   if (!m || !x0 || !finite4(x0))
     return ss__fail(d, SS_EINVAL, "initial", 0,
                     "the initial state must be four finite numbers");
-  return ss_sim_init_mode(s, m, t0, x0, ss_mode_of_state(m, x0), d);
+  return ss__sim_init_mode(s, m, t0, x0, ss_mode_of_state(m, x0), d);
 }
+
+ss_sim *ss_sim_new_mode(const ss_model *m, double t0, const double x0[4],
+                        ss_mode mode, ss_diag *d) {
+  ss_sim *s = malloc(sizeof *s);
+  if (!s) {
+    ss__fail(d, SS_ENOMEM, "", 0, "out of memory");
+    return NULL;
+  }
+  if (ss__sim_init_mode(s, m, t0, x0, mode, d)) {
+    free(s);
+    return NULL;
+  }
+  return s;
+}
+
+ss_sim *ss_sim_new(const ss_model *m, double t0, const double x0[4],
+                   ss_diag *d) {
+  if (!m || !x0 || !finite4(x0)) {
+    ss__fail(d, SS_EINVAL, "initial", 0,
+             "the initial state must be four finite numbers");
+    return NULL;
+  }
+  return ss_sim_new_mode(m, t0, x0, ss_mode_of_state(m, x0), d);
+}
+
+void ss_sim_free(ss_sim *s) { free(s); }
+
+ss_mode ss_sim_mode(const ss_sim *s) { return s->mode; }
 
 double ss_sim_time(const ss_sim *s) { return s->t_hi + s->t_lo; }
 
@@ -88,6 +116,9 @@ static int sim_find(ss_sim *s, double H) {
   if (s->mode != SS_MODE_STICK) {
     ss__switching(s->m, s->mode, 0, s->x, &g);
     rc = ss_trig_first_root(&g, 0, H, &t);
+    /* x2' beyond V at the anchor contradicts the mode: the state is bad */
+    if (rc == SS_ABOVE)
+      rc = SS_EINVAL;
     if (rc == SS_NEVER) {
       s->perpetual = 1;
       s->next_status = SS_HORIZON;
@@ -107,6 +138,9 @@ static int sim_find(ss_sim *s, double H) {
   int rc_lo;
   ss__switching(s->m, SS_MODE_STICK, 1, s->x, &g);
   rc = ss_trig_first_root(&g, 0, H, &t_up);
+  /* a stick force already beyond +ur: the state is not a stick */
+  if (rc == SS_ABOVE)
+    rc = SS_EINVAL;
   if (rc < 0) {
     s->have_next = 0;
     return rc;
@@ -114,7 +148,9 @@ static int sim_find(ss_sim *s, double H) {
   ss__switching(s->m, SS_MODE_STICK, -1, s->x, &g);
   rc_lo = ss_trig_first_root(&g, 0, rc == SS_HORIZON ? H : fmax(t_up, 1e-300),
                              &t_lo);
-  if (rc_lo < 0 && rc_lo != SS_EINVAL) {
+  /* SS_ABOVE: the force starts below -ur within the tolerance while the
+   * search for +ur decided; -ur is then not the next event. */
+  if (rc_lo < 0) {
     s->have_next = 0;
     return rc_lo;
   }
@@ -316,7 +352,7 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
     return ss__fail(d, SS_EINVAL, "", 0, "missing argument");
   if ((rc = check_opts(o, &ns, d)))
     return rc;
-  if ((rc = ss_sim_init(&s, m, o->t0, x0, d)))
+  if ((rc = ss__sim_init(&s, m, o->t0, x0, d)))
     return rc;
   if (ns) {
     r->st = malloc(ns * sizeof *r->st);

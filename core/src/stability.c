@@ -52,7 +52,7 @@ int ss_poincare(const ss_model *m, const double s[2], int turns,
   int rc, np = 0, done = 0;
   double t_last = 0;
   ss_z_to_x(m, z, x);
-  if ((rc = ss_sim_init_mode(&sim, m, 0, x, SS_MODE_SLIP, NULL)))
+  if ((rc = ss__sim_init_mode(&sim, m, 0, x, SS_MODE_SLIP, NULL)))
     return rc;
   for (size_t k = 0; k < max_events; k++) {
     double t_stop = ss_sim_time(&sim) + MAP_HORIZON;
@@ -84,13 +84,24 @@ int ss_poincare(const ss_model *m, const double s[2], int turns,
   return SS_ELIMIT_EVENTS;
 }
 
+/* Passes through Sigma0 of a sequence: the sticks that end into slip (the
+ * last phase ends there by definition). */
+static int count_turns(int n, const ss_mode *modes) {
+  int turns = 0;
+  for (int k = 0; k < n; k++)
+    turns += modes[k] == SS_MODE_STICK &&
+             (k + 1 == n || modes[k + 1] == SS_MODE_SLIP);
+  return turns;
+}
+
 int ss_stability(const ss_model *m, int n, const ss_mode *modes,
-                 const double *tau, const double z0[4], int turns, int no_fd,
-                 ss_stab *st) {
+                 const double *tau, const double z0[4],
+                 const ss_stab_opts *opts, ss_stab *st) {
   double D[4][2] = {{1, 0}, {1, 0}, {0, 1}, {0, 0}}, Z[4];
-  double chi = m->p.chi;
-  if (n < 1 || n > SS_MAX_PHASES || !st)
+  if (!m || !modes || !tau || !z0 || n < 1 || n > SS_MAX_PHASES || !st)
     return SS_EINVAL;
+  double chi = m->p.chi;
+  int turns = opts && opts->turns > 0 ? opts->turns : count_turns(n, modes);
   memset(st, 0, sizeof *st);
   memcpy(Z, z0, sizeof Z);
   for (int k = 0; k < n; k++) {
@@ -135,7 +146,7 @@ int ss_stability(const ss_model *m, int n, const ss_mode *modes,
                              hypot(st->eig_re[1], st->eig_im[1]));
   st->stable = st->spectral_radius < 1;
   st->jac_diff = NAN;
-  if (no_fd)
+  if (!opts || !opts->difference_check)
     return SS_OK;
   /* Central differences of the simulated map, column by column.  The step
    * starts at 1e-6 (balancing the O(h^2) truncation against rounding of

@@ -1,6 +1,7 @@
 /*
  * status.c: status messages and diagnostics.
  */
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -52,4 +53,18 @@ int ss__fail(ss_diag *d, int status, const char *where, double value,
   return status;
 }
 
-void ss_gsl_quiet(void) { gsl_set_error_handler_off(); }
+const char *ss_version(void) { return SS_VERSION; }
+
+/* GSL keeps one error handler per process, and its default aborts.  Turn it
+ * off once, unless the program installed its own before: then put that one
+ * back, for the program chose it. */
+static void gsl_quiet_once(void) {
+  gsl_error_handler_t *previous = gsl_set_error_handler_off();
+  if (previous)
+    gsl_set_error_handler(previous);
+}
+
+void ss_gsl_quiet(void) {
+  static pthread_once_t once = PTHREAD_ONCE_INIT;
+  pthread_once(&once, gsl_quiet_once);
+}

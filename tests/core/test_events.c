@@ -172,7 +172,16 @@ static void test_no_root(void) {
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 1e6, &t), SS_NEVER);
   g.c0 = -0.6 + 1e-12; /* sup is reached only asymptotically: horizon */
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 1e3, &t), SS_HORIZON);
-  g.c0 = 0.5; /* positive at the start: a caller error */
+  g.c0 = 0.5; /* positive at the start: told apart from a bad argument */
+  ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 10, &t), SS_ABOVE);
+  /* EVIDENCE: stickslip.h ss_trig_first_root: SS_EINVAL only for bad
+   * arguments */
+  g.c0 = -1;
+  ASSERT_EQ_INT(ss_trig_first_root(&g, 1, 1, &t), SS_EINVAL);
+  ASSERT_EQ_INT(ss_trig_first_root(&g, 0, NAN, &t), SS_EINVAL);
+  ASSERT_EQ_INT(ss_trig_first_root(NULL, 0, 10, &t), SS_EINVAL);
+  ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 10, NULL), SS_EINVAL);
+  g.n = SS_TRIG_MAX + 1;
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 10, &t), SS_EINVAL);
 }
 

@@ -8,12 +8,14 @@
 
 #include <gsl/gsl_errno.h>
 
-#include "internal.h"
 #include "refsim.h"
 #include "stickslip.h"
 #include "test.h"
 
 #define MAXO 32
+
+/* The Jacobian cross-checked by central differences of the map. */
+static const ss_stab_opts CHECKED = {0, 1};
 
 /* The orbit must close under the independent rk8pd reference: one period
  * from x0 returns to x0, through the same phases. */
@@ -63,7 +65,7 @@ static void test_paper(void) {
   ss_orbit out[MAXO];
   int n = 0;
   ss_orbit_report rep;
-  ss_orbit_opts o = {0};
+  ss_orbit_opts o = {.difference_check = 1};
   ASSERT_EQ_INT(ss_orbit_find(&m, &o, out, MAXO, &n, &rep, NULL), SS_OK);
   const ss_orbit *ov = NULL;
   for (int i = 0; i < n; i++)
@@ -101,14 +103,15 @@ static void test_paper(void) {
   ss_orbit g;
   ss_mode modes[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
   double tau[3] = {4.5, 2.717, 3.0536};
-  ASSERT_EQ_INT(ss_orbit_solve(&m, 3, modes, tau, 0, &g, NULL), SS_OK);
+  ASSERT_EQ_INT(ss_orbit_solve(&m, 3, modes, tau, &CHECKED, &g, NULL), SS_OK);
   for (int k = 0; k < 3; k++)
     ASSERT_NEAR(g.durations[k], ov->durations[k], 1e-12);
   ASSERT_TRUE(g.iterations <= 10);
   /* the stability function on the returned orbit agrees */
   ss_stab st;
   ASSERT_EQ_INT(
-      ss_stability(&m, 3, ov->modes, ov->durations, ov->z0, 1, 0, &st), SS_OK);
+      ss_stability(&m, 3, ov->modes, ov->durations, ov->z0, &CHECKED, &st),
+      SS_OK);
   ASSERT_NEAR(st.spectral_radius, ov->stab.spectral_radius, 1e-14);
   ASSERT_TRUE(st.jac_diff < 1e-6);
 }
@@ -123,7 +126,7 @@ static void test_violates_32(void) {
   ss_orbit out[MAXO];
   int n = -1;
   ss_orbit_report rep;
-  ss_orbit_opts o = {0};
+  ss_orbit_opts o = {.difference_check = 1};
   o.kinds = SS_ORBIT_OVERSHOOT;
   ASSERT_EQ_INT(ss_orbit_find(&m, &o, out, MAXO, &n, &rep, NULL), SS_OK);
   ASSERT_EQ_INT(n, 0);
@@ -135,7 +138,7 @@ static void test_violates_32(void) {
   ss_orbit g;
   ss_diag d;
   ss_diag_clear(&d);
-  int rc = ss_orbit_solve(&m, 3, modes, tau, 1, &g, &d);
+  int rc = ss_orbit_solve(&m, 3, modes, tau, NULL, &g, &d);
   ASSERT_EQ_INT(rc, SS_INFEASIBLE);
   ASSERT_TRUE(strstr(d.text, "(3.2)") != NULL);
 }
@@ -155,7 +158,7 @@ static void test_other_sets(void) {
     ss_model_init(&m, &sets[s], NULL);
     ss_orbit out[MAXO];
     int n = 0;
-    ss_orbit_opts o = {0};
+    ss_orbit_opts o = {.difference_check = 1};
     ASSERT_EQ_INT(ss_orbit_find(&m, &o, out, MAXO, &n, NULL, NULL), SS_OK);
     char what[64];
     snprintf(what, sizeof what, "set %zu", s);
@@ -191,7 +194,7 @@ static void test_sweep(void) {
         ss_model m;
         ss_orbit out[MAXO];
         int n = 0;
-        ss_orbit_opts o = {0};
+        ss_orbit_opts o = {.difference_check = 1};
         ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
         ASSERT_EQ_INT(ss_orbit_find(&m, &o, out, MAXO, &n, NULL, NULL), SS_OK);
         sets++;
@@ -214,6 +217,11 @@ static void test_sweep(void) {
   printf("sweep: %d parameter sets, %d orbits (%d sets with none), worst "
          "relative |J - J_fd| %.2g, worst closure %.2g\n",
          sets, total, empty, worst_rel, worst_closure);
+  /* what the search finds today: every set has an orbit, 328 in all; a
+   * search that lost a sizeable part of them fails here */
+  ASSERT_EQ_INT(sets, 112);
+  ASSERT_EQ_INT(empty, 0);
+  ASSERT_TRUE(total >= 320);
 }
 
 /* EVIDENCE: issue 3.1 the analytic Jacobian of the duration equations
@@ -240,7 +248,7 @@ static void test_equation_jacobian(void) {
     int n = cases[c].n;
     double z0[4], F[5], J[25], Fp[5], Fm[5];
     ASSERT_EQ_INT(
-        ss__orbit_equations(&m, n, cases[c].modes, cases[c].tau, z0, F, J),
+        ss_orbit_equations(&m, n, cases[c].modes, cases[c].tau, z0, F, J),
         SS_OK);
     for (int j = 0; j < n; j++) {
       double tp[5], tm[5], h = 1e-6;
@@ -248,8 +256,8 @@ static void test_equation_jacobian(void) {
       memcpy(tm, cases[c].tau, sizeof tm);
       tp[j] += h;
       tm[j] -= h;
-      ss__orbit_equations(&m, n, cases[c].modes, tp, z0, Fp, NULL);
-      ss__orbit_equations(&m, n, cases[c].modes, tm, z0, Fm, NULL);
+      ss_orbit_equations(&m, n, cases[c].modes, tp, z0, Fp, NULL);
+      ss_orbit_equations(&m, n, cases[c].modes, tm, z0, Fm, NULL);
       for (int i = 0; i < n; i++) {
         double fd = (Fp[i] - Fm[i]) / (2 * h);
         double e = fabs(fd - J[n * i + j]) / fmax(1.0, fabs(fd));
@@ -274,9 +282,9 @@ static void test_bad_input(void) {
   double tau[3] = {1, 1, 1}, neg[3] = {1, -1, 1};
   ss_mode modes[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
   ss_diag_clear(&d);
-  ASSERT_EQ_INT(ss_orbit_solve(&m, 3, bad, tau, 1, &g, &d), SS_EINVAL);
+  ASSERT_EQ_INT(ss_orbit_solve(&m, 3, bad, tau, NULL, &g, &d), SS_EINVAL);
   ss_diag_clear(&d);
-  ASSERT_EQ_INT(ss_orbit_solve(&m, 3, modes, neg, 1, &g, &d), SS_EINVAL);
+  ASSERT_EQ_INT(ss_orbit_solve(&m, 3, modes, neg, NULL, &g, &d), SS_EINVAL);
   ASSERT_TRUE(strcmp(d.where, "guess") == 0);
 }
 
