@@ -3,13 +3,14 @@
  *
  * The api layer turns a request body into validated core structs, calls
  * libstickslip, and turns the result into a response body.  It knows JSON
- * (jansson) but not HTTP transport: the server hands it a body and gets back
- * a status code and a body.  The contract is api/openapi.yaml.
+ * (jansson) but not HTTP transport: the server routes a method and a path to
+ * an endpoint of the table (api_route), hands it the body, and gets back a
+ * status code, a media type and a body.  The contract is api/openapi.yaml.
  *
  * Errors are RFC 9457 problem details (application/problem+json):
  *   {"type", "title", "status", "detail", "pointer"?, "limit"?, "limit_value"?}
- * 400 for malformed JSON, 422 for a well-formed request with a wrong field
- * (the JSON pointer names it), 422 with "limit" for a request over a limit.
+ * API_PROBLEM_MAP below is the only list of problem types and of the HTTP
+ * status and title each one is answered with.
  */
 #ifndef STICKSLIP_API_H
 #define STICKSLIP_API_H
@@ -46,33 +47,112 @@ typedef struct api_response {
 /** Free the body; NULL-safe. */
 void api_response_free(api_response *r);
 
-/** The endpoints that compute. */
-typedef enum api_endpoint {
-  API_ORBIT = 0,
-  API_SIMULATE = 1,
-  API_STABILITY = 2
+/* ------------------------------------------------------------------------ */
+/* The endpoint table                                                        */
+/* ------------------------------------------------------------------------ */
+
+/** How an endpoint is served. */
+typedef enum api_run_class {
+  /** Cheap and body-less (GET): answered on the connection's own thread. */
+  API_RUN_INLINE = 0,
+  /** A POST whose JSON body asks for a computation: it takes a compute
+   *  slot, and the computation is bounded by api_limits.max_seconds. */
+  API_RUN_COMPUTE = 1
+} api_run_class;
+
+/** The public view of one row of the endpoint table (api/src/endpoints.h). */
+typedef struct api_endpoint {
+  const char *method; /**< "GET" or "POST" */
+  const char *path;   /**< e.g. "/orbit" */
+  const char *label;  /**< its name in metrics and logs, e.g. "orbit" */
+  api_run_class run_class;
 } api_endpoint;
 
+/** The number of endpoints; they are numbered 0 .. api_endpoint_count()-1. */
+size_t api_endpoint_count(void);
+
+/** Row @a i of the table; NULL when @a i is out of range. */
+const api_endpoint *api_endpoint_at(size_t i);
+
 /**
- * Handle one request body for @a ep: parse, validate, compute, encode.
- * Always fills @a out (a result or a problem); returns out->status.
- * Thread-safe.
+ * Route a request line.  HEAD is served as GET.
+ * @param[out] index  the endpoint: on 200 the one to call; on 405 the one
+ *                    that owns @a path (its method is the Allow header)
+ * @return 200 (found), 404 (no such path) or 405 (path known, method not).
  */
-int api_handle(api_endpoint ep, const char *body, size_t len,
-               const api_limits *lim, api_response *out);
+int api_route(const char *method, const char *path, size_t *index);
+
+/** What the server tells the api about itself, for the meta endpoints. */
+typedef struct api_server_info {
+  double uptime_seconds;
+  long in_flight;        /**< requests being served */
+  const char *transport; /**< e.g. the HTTP library's version, may be NULL */
+  /** The Prometheus text of the server's metrics (malloc'd; NULL when out of
+   *  memory); NULL when the server keeps none. */
+  char *(*metrics_text)(void *cls);
+  void *metrics_cls;
+} api_server_info;
+
+/**
+ * Serve endpoint @a index: for API_RUN_COMPUTE, parse, validate, compute and
+ * encode @a body; for API_RUN_INLINE, @a body is ignored.  Always fills
+ * @a out (a result or a problem); returns out->status.  @a srv may be NULL
+ * (the meta endpoints then report what they can).  Thread-safe.
+ */
+int api_handle(size_t index, const char *body, size_t len,
+               const api_limits *lim, const api_server_info *srv,
+               api_response *out);
+
+/* ------------------------------------------------------------------------ */
+/* Problems                                                                  */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * The one table of problem types: name, HTTP status, type (the tail of
+ * "/problems/<type>"), title.  Core statuses are mapped onto these rows by
+ * the table API_STATUS_PROBLEM in api/src/problem.c, the only place that
+ * mapping is written.
+ */
+#define API_PROBLEM_MAP(X)                                                     \
+  X(INVALID_JSON, 400, "invalid-json", "Bad Request")                          \
+  X(NOT_FOUND, 404, "not-found", "Not Found")                                  \
+  X(METHOD_NOT_ALLOWED, 405, "method-not-allowed", "Method Not Allowed")       \
+  X(BODY_TOO_LARGE, 413, "limit-exceeded", "Content Too Large")                \
+  X(MEDIA_TYPE, 415, "unsupported-media-type", "Unsupported Media Type")       \
+  X(INVALID_TYPE, 422, "invalid-type", "Unprocessable Content")                \
+  X(INVALID_VALUE, 422, "invalid-value", "Unprocessable Content")              \
+  X(MISSING_FIELD, 422, "missing-field", "Unprocessable Content")              \
+  X(UNKNOWN_FIELD, 422, "unknown-field", "Unprocessable Content")              \
+  X(NO_CONVERGENCE, 422, "no-convergence", "Unprocessable Content")            \
+  X(LIMIT, 422, "limit-exceeded", "Request over a limit")                      \
+  X(INTERNAL, 500, "internal", "Internal Server Error")                        \
+  X(OVERLOADED, 503, "overloaded", "Service Unavailable")                      \
+  X(OUT_OF_MEMORY, 503, "out-of-memory", "Service Unavailable")                \
+  X(SHUTTING_DOWN, 503, "shutting-down", "Service Unavailable")
+
+/** The problem types, in the order of API_PROBLEM_MAP. */
+typedef enum api_problem_kind {
+#define API_PROBLEM_ENUM(name, status, type, title) API_P_##name,
+  API_PROBLEM_MAP(API_PROBLEM_ENUM)
+#undef API_PROBLEM_ENUM
+      API_P_COUNT
+} api_problem_kind;
+
+/** The HTTP status of a problem type (500 for an unknown one). */
+int api_problem_status(api_problem_kind kind);
 
 /**
  * A problem response built by the caller (transport errors: 404, 405, 413,
- * 415, 503).  @a pointer and @a limit may be NULL.
+ * 415, 503).  @a detail, @a pointer and @a limit may be NULL; @a limit
+ * names the limit that was hit, @a limit_value its value.
  */
-void api_problem(api_response *out, int status, const char *type,
-                 const char *title, const char *detail, const char *pointer,
-                 const char *limit, double limit_value);
+void api_problem(api_response *out, api_problem_kind kind, const char *detail,
+                 const char *pointer, const char *limit, double limit_value);
 
 /** The OpenAPI document (api/openapi.yaml, which is written in JSON syntax). */
 const char *api_openapi_json(void);
 
-/** The version string of the service. */
+/** The version string of the service (the library's SS_VERSION). */
 const char *api_version(void);
 
 #ifdef __cplusplus

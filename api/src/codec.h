@@ -1,88 +1,270 @@
 /*
- * codec.h: internal helpers of the api layer: problem details and field
- * decoding with JSON pointers.
+ * codec.h: internal helpers of the api layer: problems, declarative request
+ * specs with JSON pointers, the parameters every endpoint shares, and the
+ * encoding helpers.
  */
 #ifndef SS_API_CODEC_H
 #define SS_API_CODEC_H
 
 #include <jansson.h>
+#include <stddef.h>
 
 #include "stickslip.h"
 #include "stickslip_api.h"
 
+#define API_FORMAT(a, b)
+#ifdef __GNUC__
+#undef API_FORMAT
+#define API_FORMAT(a, b) __attribute__((format(printf, a, b)))
+#endif
+
+/* ---- problems ----------------------------------------------------------- */
+
 /* A problem being built; the first failure wins. */
 typedef struct api_err {
-  int status; /* 0: none */
-  char type[48];
-  char title[64];
+  int set;
+  api_problem_kind kind;
   char detail[400];
   char pointer[160];
   char limit[32];
   double limit_value;
 } api_err;
 
-int api__fail(api_err *e, int status, const char *type, const char *pointer,
-              const char *fmt, ...)
-#ifdef __GNUC__
-    __attribute__((format(printf, 5, 6)))
-#endif
-    ;
-int api__limit(api_err *e, const char *limit, double value, const char *pointer,
-               const char *fmt, ...)
-#ifdef __GNUC__
-    __attribute__((format(printf, 5, 6)))
-#endif
-    ;
+/* Record a problem of @a kind at @a pointer (may be NULL); returns -1. */
+int api__fail(api_err *e, api_problem_kind kind, const char *pointer,
+              const char *fmt, ...) API_FORMAT(4, 5);
 
-/* The response for a problem. */
+/* A request over the limit named @a limit (its value @a value); returns -1. */
+int api__limit(api_err *e, const char *limit, double value, const char *pointer,
+               const char *fmt, ...) API_FORMAT(5, 6);
+
+/* A failure status of the core that is a limit: as api__status, and the
+ * problem names the limit @a limit and its value. */
+int api__status_limit(api_err *e, int status, const char *limit, double value,
+                      const char *pointer, const char *fmt, ...)
+    API_FORMAT(6, 7);
+
+/* A failure status of the core, answered by the table API_STATUS_PROBLEM;
+ * a status the table does not know is an internal error.  @a pointer names
+ * the field at fault (may be NULL).  Returns -1. */
+int api__status(api_err *e, int status, const char *pointer, const char *fmt,
+                ...) API_FORMAT(4, 5);
+
+/* The core's diagnostic as a problem: the pointer is @a base followed by the
+ * diagnostic's "where" (a parameter name), the detail is its text. */
+int api__from_diag(api_err *e, int rc, const ss_diag *d, const char *base);
+
+/* The response for a recorded problem. */
 void api__problem_response(const api_err *e, api_response *out);
 
-/* Field access.  Each returns 0 (set), 1 (absent and optional) or -1
- * (error recorded in e).  ptr is the JSON pointer of the containing object. */
-int api__keys(const json_t *obj, const char *ptr, const char *const *allowed,
-              api_err *e);
-int api__object(const json_t *obj, const char *ptr, const char *key,
-                int required, json_t **out, api_err *e);
-int api__number(const json_t *obj, const char *ptr, const char *key,
-                int required, double *out, api_err *e);
-int api__count(const json_t *obj, const char *ptr, const char *key,
-               int required, long long lo, long long hi, long long *out,
-               api_err *e);
-int api__bool(const json_t *obj, const char *ptr, const char *key, int required,
-              int *out, api_err *e);
-int api__vec(const json_t *obj, const char *ptr, const char *key, int required,
-             size_t n, double *out, api_err *e);
-int api__string(const json_t *obj, const char *ptr, const char *key,
-                int required, const char **out, api_err *e);
+/* ---- one call of an endpoint ------------------------------------------- */
 
-/* The physical or dimensionless parameters of a request. */
+typedef struct api_call {
+  const api_limits *lim;
+  const api_server_info *srv; /* may be NULL */
+  api_err *e;
+} api_call;
+
+/* ---- declarative request specs ----------------------------------------- */
+
+typedef enum api_type {
+  API_T_ANY,    /* accepted and ignored (a key of an object echoed back) */
+  API_T_NUMBER, /* double, finite, in [lo, hi] */
+  API_T_COUNT,  /* integer in [lo, hi] (long long) */
+  API_T_BOOL,   /* true or false (int) */
+  API_T_ENUM,   /* one of the strings in aux (int index) */
+  API_T_VEC4,   /* four finite numbers (double[4]) */
+  API_T_OBJECT, /* an object described by the spec in aux */
+  API_T_CUSTOM  /* decoded and echoed by the api_custom in aux */
+} api_type;
+
+enum {
+  API_REQUIRED = 1,  /* missing is an error (in its alternative, if any) */
+  API_ECHO_NEVER = 2 /* not echoed in the response's "input" */
+};
+
+/* Echo rule: a field is echoed when it was given, is required outside any
+ * alternative, or has a default (API_DEFAULT); otherwise it is left out. */
+enum { API_DEFAULT = 4 };
+
+typedef struct api_field api_field;
+
+/* A field whose value needs code: arrays of modes, of times, of phases. */
+typedef struct api_custom {
+  int (*decode)(const json_t *v, const char *ptr, void *dest,
+                const api_call *c);
+  json_t *(*echo)(const void *dest);
+} api_custom;
+
+/* An object: its fields, in the order they are checked and echoed. */
+typedef struct api_spec {
+  const api_field *fields;
+  int n;
+} api_spec;
+
+struct api_field {
+  const char *name;
+  api_type type;
+  unsigned flags;
+  double lo, hi;     /* NUMBER, COUNT: the accepted range, inclusive */
+  const char *limit; /* COUNT: the api_limits field bounding it, by name */
+  size_t off;        /* where the value goes, from the struct's start */
+  size_t has;        /* 1 + offset of an int set to 1 when given; 0: none */
+  int group, alt;    /* group > 0: exactly one alternative of the group */
+  const void *aux;   /* ENUM: const char *const[] (NULL-terminated);
+                        OBJECT: const api_spec *; CUSTOM: const api_custom * */
+};
+
+#define API_HAS(type, member) (offsetof(type, member) + 1)
+#define API_SPEC(fields)                                                       \
+  { fields, (int)(sizeof fields / sizeof fields[0]) }
+
+/*
+ * Decode the object @a obj at JSON pointer @a ptr by @a spec into @a dest:
+ * unknown keys are refused (the message lists the known ones), each group
+ * must have exactly one alternative, required fields must be present, and
+ * every value must have its type and range.  Returns 0 or -1 (problem in
+ * c->e).
+ */
+int api__decode(const api_spec *spec, const json_t *obj, const char *ptr,
+                void *dest, const api_call *c);
+
+/* The echo of a decoded object: the fields given or with a default, in
+ * spec order, from @a dest (the units are the request's). */
+json_t *api__echo(const api_spec *spec, const void *dest);
+
+/* Whether the field @a name of a decoded struct was given. */
+int api__given(const api_spec *spec, const void *dest, const char *name);
+
+/* The numbers of the JSON array @a v into @a out (room for all of them);
+ * an element that is not a finite number is an error at @a ptr. */
+int api__numbers(const json_t *v, const char *ptr, double *out, api_err *e);
+
+/* ---- parameters shared by every computing endpoint --------------------- */
+
+/* "params" or "physical", as given, and the dimensionless parameters with
+ * the time scale omega (1 when dimensionless). */
 typedef struct api_params {
   ss_params p;
-  int physical;
   ss_physical ph;
-  double omega; /* 1 when dimensionless */
+  int has_params, has_physical;
+  double omega;
 } api_params;
 
-/* The field names of "params" and "physical", in the order of the fields of
- * ss_params and ss_physical (NULL-terminated); decode and echo share them. */
-extern const char *const API_PARAM_KEYS[];
-extern const char *const API_PHYS_KEYS[];
+/* The two fields "params" and "physical" (group 1), for an endpoint's spec;
+ * @a type is the endpoint's request struct, @a m its api_params member. */
+extern const api_spec API_PARAMS_SPEC, API_PHYSICAL_SPEC;
+#define API_PARAMS_FIELDS(type, m)                                             \
+  {"params",                                                                   \
+   API_T_OBJECT,                                                               \
+   API_REQUIRED | API_ECHO_NEVER,                                              \
+   0,                                                                          \
+   0,                                                                          \
+   NULL,                                                                       \
+   offsetof(type, m) + offsetof(api_params, p),                                \
+   API_HAS(type, m.has_params),                                                \
+   1,                                                                          \
+   0,                                                                          \
+   &API_PARAMS_SPEC},                                                          \
+  {                                                                            \
+    "physical", API_T_OBJECT, API_REQUIRED | API_ECHO_NEVER, 0, 0, NULL,       \
+        offsetof(type, m) + offsetof(api_params, ph),                          \
+        API_HAS(type, m.has_physical), 1, 1, &API_PHYSICAL_SPEC                \
+  }
 
-int api__params(const json_t *root, api_params *ap, api_err *e);
-json_t *api__params_echo(const api_params *ap);
+/* The keys of an orbit object, as /orbit returns it, that no request
+ * reads: a client may send an orbit back as it got it. */
+#define API_ORBIT_IGNORED_FIELDS                                               \
+  {"kind", API_T_ANY}, {"period", API_T_ANY}, {"n_turns", API_T_ANY},          \
+      {"margins", API_T_ANY}, {"residual", API_T_ANY}, {"closure", API_T_ANY}, \
+      {"stability", API_T_ANY}, {"samples", API_T_ANY}, {"source", API_T_ANY}, \
+  {                                                                            \
+    "iterations", API_T_ANY                                                    \
+  }
 
-/* Encoding helpers that never emit NaN or Infinity: a non-finite value
- * becomes null. */
+/* Phase sequences: durations (2 to SS_MAX_PHASES numbers > 0) and modes
+ * (as many mode names), as fields of a spec. */
+typedef struct api_durations {
+  double v[SS_MAX_PHASES];
+  int n;
+} api_durations;
+typedef struct api_modes {
+  ss_mode m[SS_MAX_PHASES];
+  int n;
+} api_modes;
+extern const api_custom API_DURATIONS, API_MODES;
+
+/* "slip", "overshoot", "stick" to a mode; -1 for anything else. */
+int api__mode_of(const char *s, ss_mode *m);
+
+/* The rules every orbit's sequence obeys: it starts with slip (at the
+ * stick -> slip point), ends with stick, and never repeats a mode in two
+ * consecutive phases.  @a ptr is the pointer of the array.  0 or -1. */
+int api__sequence(const api_modes *s, const char *ptr, const api_call *c);
+
+/* After api__decode: check the parameters with the core and derive the
+ * dimensionless ones and omega.  Returns 0 or -1. */
+int api__params_resolve(api_params *ap, const api_call *c);
+
+/* The steps every computing endpoint's decode shares: its struct allocated
+ * (zeroed) in *xp, NULL when out of memory; the body decoded by @a spec with
+ * the parameters resolved; the model of the parameters initialised. */
+void *api__alloc(size_t size, void **xp, const api_call *c);
+int api__decode_request(const api_spec *spec, const json_t *root, void *x,
+                        api_params *ap, const api_call *c);
+int api__model(ss_model *m, const api_params *ap, const api_call *c);
+
+/* The echo of the parameters: "params" (dimensionless), and for a physical
+ * request "physical" and "omega"; added to @a in. */
+void api__params_echo(json_t *in, const api_params *ap);
+
+/* ---- units: every conversion of a request goes through these ----------- */
+
+/* A time of the request in dimensionless time, and back. */
+static inline double api__time_in(const api_params *ap, double t) {
+  return t * ap->omega;
+}
+static inline double api__time_out(const api_params *ap, double t) {
+  return t / ap->omega;
+}
+
+/* ---- encoding ---------------------------------------------------------- */
+
+/* Helpers that never emit NaN or Infinity: a non-finite value becomes
+ * null. */
 json_t *api__real(double v);
 json_t *api__vec4(const double x[4]);
+json_t *api__vec(const double *x, int n);
 int api__set(json_t *obj, const char *key, json_t *v);
+
+/* A state in the request's units. */
+json_t *api__state(const api_params *ap, const double x[4]);
+
+/* Finish a computing answer @a out (consumed): the echo of the request
+ * @a x by @a spec with its parameters as "input", the "units" and the
+ * "version"; then the 200 response. */
+int api__answer(json_t *out, const api_spec *spec, const void *x,
+                const api_params *ap, const api_call *c, api_response *resp);
+
+/* The samples of a simulation as columns t, x1, x2, v1, v2, mode, in the
+ * units of the request. */
+json_t *api__samples(const ss_sim_result *r, const api_params *ap);
+
+/* The phases of an orbit [{mode, duration}] in the units of the request. */
+json_t *api__phases(int n, const ss_mode *modes, const double *tau,
+                    const api_params *ap);
+
+/* The Jacobian of the Poincare map, and the whole stability object, in the
+ * request's units. */
+json_t *api__jacobian(const double J[2][2], const api_params *ap);
+json_t *api__stability(const ss_stab *st, const api_params *ap);
+
+/* A 200 application/json answer with the body of @a j (consumed). */
+int api__json_response(json_t *j, api_response *out, api_err *e);
 
 /* The compact text of @a j (malloc'd, NUL-terminated, length in *len), with
  * reals in the shortest of 15-17 significant digits that reads back exactly;
  * NULL when out of memory.  Strings must be valid UTF-8 (jansson's own). */
 char *api__dump(const json_t *j, size_t *len);
-
-/* The core's diagnostic as a problem, with the JSON pointer of where. */
-void api__from_diag(api_err *e, int rc, const ss_diag *d, const char *ptr_base);
 
 #endif

@@ -1,12 +1,18 @@
 /*
- * decode.c: field-by-field validation of request bodies.  Every value is
- * checked for type, finiteness, range and length, and every failure names
- * the field by its JSON pointer.  A missing required field is an error,
- * never a zero; an unknown field is an error, never ignored.
+ * decode.c: requests decoded from their declarative specs.
+ *
+ * Each endpoint describes its fields once (api_field: name, type, range,
+ * required, destination, alternative); from that one description this file
+ * refuses unknown keys, reports missing fields, checks every value for type,
+ * finiteness, range and limit, writes it to its destination, and echoes the
+ * request back.  Every failure names the field by its JSON pointer.  A
+ * missing required field is an error, never a zero; an unknown field is an
+ * error, never ignored.
  */
 #include <ctype.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "codec.h"
@@ -31,194 +37,414 @@ static void join(char *out, size_t n, const char *ptr, const char *key) {
   snprintf(out, n, "%s/%s", ptr, k);
 }
 
-int api__keys(const json_t *obj, const char *ptr, const char *const *allowed,
-              api_err *e) {
+/* A field is given when its key is there with a non-null value. */
+static const json_t *given(const json_t *obj, const char *name) {
+  const json_t *v = json_object_get(obj, name);
+  return v && !json_is_null(v) ? v : NULL;
+}
+
+static int unknown_keys(const api_spec *s, const json_t *obj, const char *ptr,
+                        api_err *e) {
   const char *key;
   json_t *v;
   json_object_foreach((json_t *)obj, key, v) {
-    int ok = 0;
-    for (int i = 0; allowed[i]; i++)
-      if (strcmp(key, allowed[i]) == 0)
-        ok = 1;
-    if (!ok) {
+    int known = 0;
+    for (int i = 0; i < s->n && !known; i++)
+      known = strcmp(key, s->fields[i].name) == 0;
+    if (!known) {
       char p[160], list[256] = "";
       join(p, sizeof p, ptr, key);
-      for (int i = 0; allowed[i]; i++) {
+      for (int i = 0; i < s->n; i++) {
         strncat(list, i ? ", " : "", sizeof list - strlen(list) - 1);
-        strncat(list, allowed[i], sizeof list - strlen(list) - 1);
+        strncat(list, s->fields[i].name, sizeof list - strlen(list) - 1);
       }
-      return api__fail(e, 422, "unknown-field", p,
+      return api__fail(e, API_P_UNKNOWN_FIELD, p,
                        "unknown field '%s'; the fields here are: %s", p, list);
     }
   }
   return 0;
 }
 
-static int lookup(const json_t *obj, const char *ptr, const char *key,
-                  int required, json_t **v, char *p, size_t pn, api_err *e) {
-  join(p, pn, ptr, key);
-  *v = json_object_get(obj, key);
-  if (!*v || json_is_null(*v)) {
-    if (required)
-      return api__fail(e, 422, "missing-field", p,
-                       "the required field %s is missing", p);
-    return 1;
+/* The fields of alternative @a alt of group @a g, as "/a and /b". */
+static void alt_names(const api_spec *s, int g, int alt, const char *ptr,
+                      char *out, size_t n) {
+  out[0] = 0;
+  for (int i = 0; i < s->n; i++) {
+    const api_field *f = &s->fields[i];
+    if (f->group != g || f->alt != alt || !(f->flags & API_REQUIRED))
+      continue;
+    size_t l = strlen(out);
+    snprintf(out + l, n - l, "%s%s/%s", l ? " and " : "", ptr, f->name);
+  }
+}
+
+/* Exactly one alternative of each group: chosen[g] is its number. */
+static int groups(const api_spec *s, const json_t *obj, const char *ptr,
+                  int chosen[8], api_err *e) {
+  for (int g = 1; g < 8; g++) {
+    int first_field = -1;
+    char a[128], b[128], p[160];
+    chosen[g] = -1;
+    for (int i = 0; i < s->n; i++) {
+      const api_field *f = &s->fields[i];
+      if (f->group != g)
+        continue;
+      if (first_field < 0)
+        first_field = i;
+      if (!given(obj, f->name))
+        continue;
+      if (chosen[g] < 0) {
+        chosen[g] = f->alt;
+      } else if (f->alt != chosen[g]) {
+        alt_names(s, g, chosen[g], ptr, a, sizeof a);
+        alt_names(s, g, f->alt, ptr, b, sizeof b);
+        join(p, sizeof p, ptr, f->name);
+        return api__fail(e, API_P_INVALID_VALUE, p,
+                         "give either %s or %s, not both", a, b);
+      }
+    }
+    if (first_field >= 0 && chosen[g] < 0) {
+      alt_names(s, g, 0, ptr, a, sizeof a);
+      alt_names(s, g, 1, ptr, b, sizeof b);
+      join(p, sizeof p, ptr, s->fields[first_field].name);
+      return api__fail(e, API_P_MISSING_FIELD, p,
+                       "the required field %s is missing: give %s or %s", p, a,
+                       b);
+    }
   }
   return 0;
 }
 
-int api__object(const json_t *obj, const char *ptr, const char *key,
-                int required, json_t **out, api_err *e) {
-  char p[160];
-  int rc = lookup(obj, ptr, key, required, out, p, sizeof p, e);
-  if (rc)
-    return rc;
-  if (!json_is_object(*out))
-    return api__fail(e, 422, "invalid-type", p, "%s must be an object", p);
-  return 0;
+/* The value of the api_limits field named @a name. */
+static double limit_of(const api_limits *l, const char *name) {
+  if (strcmp(name, "max_samples") == 0)
+    return (double)l->max_samples;
+  if (strcmp(name, "max_events") == 0)
+    return (double)l->max_events;
+  return INFINITY;
 }
 
-int api__number(const json_t *obj, const char *ptr, const char *key,
-                int required, double *out, api_err *e) {
-  char p[160];
-  json_t *v;
-  int rc = lookup(obj, ptr, key, required, &v, p, sizeof p, e);
-  if (rc)
-    return rc;
+static int number(const api_field *f, const json_t *v, const char *p,
+                  double *out, api_err *e) {
   if (!json_is_number(v))
-    return api__fail(e, 422, "invalid-type", p, "%s must be a number", p);
+    return api__fail(e, API_P_INVALID_TYPE, p, "%s must be a number", p);
   *out = json_number_value(v);
   if (!isfinite(*out))
-    return api__fail(e, 422, "invalid-value", p, "%s must be finite", p);
-  return 0;
-}
-
-int api__count(const json_t *obj, const char *ptr, const char *key,
-               int required, long long lo, long long hi, long long *out,
-               api_err *e) {
-  char p[160];
-  json_t *v;
-  int rc = lookup(obj, ptr, key, required, &v, p, sizeof p, e);
-  if (rc)
-    return rc;
-  if (!json_is_integer(v))
-    return api__fail(e, 422, "invalid-type", p, "%s must be an integer", p);
-  *out = (long long)json_integer_value(v);
-  if (*out < lo || *out > hi)
-    return api__fail(e, 422, "invalid-value", p,
-                     "%s must be between %lld and %lld (got %lld)", p, lo, hi,
+    return api__fail(e, API_P_INVALID_VALUE, p, "%s must be finite", p);
+  if (f->lo < f->hi && !(*out >= f->lo && *out <= f->hi))
+    return api__fail(e, API_P_INVALID_VALUE, p,
+                     "%s must be between %g and %g (got %g)", p, f->lo, f->hi,
                      *out);
   return 0;
 }
 
-int api__bool(const json_t *obj, const char *ptr, const char *key, int required,
-              int *out, api_err *e) {
-  char p[160];
-  json_t *v;
-  int rc = lookup(obj, ptr, key, required, &v, p, sizeof p, e);
-  if (rc)
-    return rc;
-  if (!json_is_boolean(v))
-    return api__fail(e, 422, "invalid-type", p, "%s must be true or false", p);
-  *out = json_is_true(v);
+static int count(const api_field *f, const json_t *v, const char *p,
+                 long long *out, const api_call *c) {
+  if (!json_is_integer(v))
+    return api__fail(c->e, API_P_INVALID_TYPE, p, "%s must be an integer", p);
+  *out = (long long)json_integer_value(v);
+  if (*out < (long long)f->lo || *out > (long long)f->hi)
+    return api__fail(c->e, API_P_INVALID_VALUE, p,
+                     "%s must be between %lld and %lld (got %lld)", p,
+                     (long long)f->lo, (long long)f->hi, *out);
+  if (f->limit) {
+    double lim = limit_of(c->lim, f->limit);
+    if ((double)*out > lim)
+      return api__limit(c->e, f->limit, lim, p,
+                        "%s = %lld is over the limit %s = %.0f", p, *out,
+                        f->limit, lim);
+  }
   return 0;
 }
 
-int api__string(const json_t *obj, const char *ptr, const char *key,
-                int required, const char **out, api_err *e) {
-  char p[160];
-  json_t *v;
-  int rc = lookup(obj, ptr, key, required, &v, p, sizeof p, e);
-  if (rc)
-    return rc;
-  if (!json_is_string(v))
-    return api__fail(e, 422, "invalid-type", p, "%s must be a string", p);
-  *out = json_string_value(v);
+static int vec4(const json_t *v, const char *p, double *out, api_err *e) {
+  if (!json_is_array(v) || json_array_size(v) != 4)
+    return api__fail(e, API_P_INVALID_TYPE, p,
+                     "%s must be an array of 4 numbers", p);
+  return api__numbers(v, p, out, e);
+}
+
+static int enumeration(const api_field *f, const json_t *v, const char *p,
+                       int *out, api_err *e) {
+  const char *const *names = f->aux;
+  char list[160] = "";
+  for (int i = 0; json_is_string(v) && names[i]; i++)
+    if (strcmp(json_string_value(v), names[i]) == 0) {
+      *out = i;
+      return 0;
+    }
+  for (int i = 0; names[i]; i++) {
+    size_t l = strlen(list);
+    snprintf(list + l, sizeof list - l, "%s\"%s\"", i ? ", " : "", names[i]);
+  }
+  return api__fail(e,
+                   json_is_string(v) ? API_P_INVALID_VALUE : API_P_INVALID_TYPE,
+                   p, "%s must be one of %s", p, list);
+}
+
+static int field(const api_field *f, const json_t *v, const char *p, char *dst,
+                 const api_call *c) {
+  switch (f->type) {
+  case API_T_ANY:
+    return 0;
+  case API_T_NUMBER:
+    return number(f, v, p, (double *)(dst + f->off), c->e);
+  case API_T_COUNT:
+    return count(f, v, p, (long long *)(dst + f->off), c);
+  case API_T_BOOL:
+    if (!json_is_boolean(v))
+      return api__fail(c->e, API_P_INVALID_TYPE, p, "%s must be true or false",
+                       p);
+    *(int *)(dst + f->off) = json_is_true(v);
+    return 0;
+  case API_T_ENUM:
+    return enumeration(f, v, p, (int *)(dst + f->off), c->e);
+  case API_T_VEC4:
+    return vec4(v, p, (double *)(dst + f->off), c->e);
+  case API_T_OBJECT:
+    if (!json_is_object(v))
+      return api__fail(c->e, API_P_INVALID_TYPE, p, "%s must be an object", p);
+    return api__decode(f->aux, v, p, dst + f->off, c);
+  case API_T_CUSTOM:
+    return ((const api_custom *)f->aux)->decode(v, p, dst + f->off, c);
+  }
+  return api__fail(c->e, API_P_INTERNAL, p, "field %s has no decoder", p);
+}
+
+int api__decode(const api_spec *s, const json_t *obj, const char *ptr,
+                void *dest, const api_call *c) {
+  int chosen[8];
+  char *dst = dest;
+  if (unknown_keys(s, obj, ptr, c->e) || groups(s, obj, ptr, chosen, c->e))
+    return -1;
+  for (int i = 0; i < s->n; i++) {
+    const api_field *f = &s->fields[i];
+    const json_t *v = given(obj, f->name);
+    char p[160];
+    join(p, sizeof p, ptr, f->name);
+    if (!v) {
+      if ((f->flags & API_REQUIRED) &&
+          (f->group == 0 || chosen[f->group] == f->alt))
+        return api__fail(c->e, API_P_MISSING_FIELD, p,
+                         "the required field %s is missing", p);
+      continue;
+    }
+    if (field(f, v, p, dst, c))
+      return -1;
+    if (f->has)
+      *(int *)(dst + f->has - 1) = 1;
+  }
   return 0;
 }
 
-int api__vec(const json_t *obj, const char *ptr, const char *key, int required,
-             size_t n, double *out, api_err *e) {
-  char p[160];
-  json_t *v;
-  int rc = lookup(obj, ptr, key, required, &v, p, sizeof p, e);
-  if (rc)
-    return rc;
-  if (!json_is_array(v) || json_array_size(v) != n)
-    return api__fail(e, 422, "invalid-type", p,
-                     "%s must be an array of %zu numbers", p, n);
-  for (size_t i = 0; i < n; i++) {
+int api__given(const api_spec *s, const void *dest, const char *name) {
+  for (int i = 0; i < s->n; i++)
+    if (strcmp(s->fields[i].name, name) == 0 && s->fields[i].has)
+      return *(const int *)((const char *)dest + s->fields[i].has - 1);
+  return 0;
+}
+
+json_t *api__echo(const api_spec *s, const void *dest) {
+  json_t *o = json_object();
+  const char *src = dest;
+  for (int i = 0; i < s->n; i++) {
+    const api_field *f = &s->fields[i];
+    const void *at = src + f->off;
+    int was_given = f->has && *(const int *)(src + f->has - 1);
+    json_t *v = NULL;
+    /* a required field outside any alternative was given, or the request
+     * would have been refused */
+    int always = (f->flags & API_DEFAULT) ||
+                 ((f->flags & API_REQUIRED) && f->group == 0);
+    if ((f->flags & API_ECHO_NEVER) || f->type == API_T_ANY ||
+        !(was_given || always))
+      continue;
+    switch (f->type) {
+    case API_T_NUMBER:
+      v = api__real(*(const double *)at);
+      break;
+    case API_T_COUNT:
+      v = json_integer(*(const long long *)at);
+      break;
+    case API_T_BOOL:
+      v = json_boolean(*(const int *)at);
+      break;
+    case API_T_ENUM:
+      v = json_string(((const char *const *)f->aux)[*(const int *)at]);
+      break;
+    case API_T_VEC4:
+      v = api__vec4(at);
+      break;
+    case API_T_OBJECT:
+      v = api__echo(f->aux, at);
+      break;
+    case API_T_CUSTOM:
+      v = ((const api_custom *)f->aux)->echo(at);
+      break;
+    case API_T_ANY:
+      break;
+    }
+    api__set(o, f->name, v);
+  }
+  return o;
+}
+
+int api__numbers(const json_t *v, const char *ptr, double *out, api_err *e) {
+  for (size_t i = 0; i < json_array_size(v); i++) {
     json_t *x = json_array_get(v, i);
     if (!json_is_number(x) || !isfinite(json_number_value(x)))
-      return api__fail(e, 422, "invalid-type", p,
-                       "%s/%zu must be a finite number", p, i);
+      return api__fail(e, API_P_INVALID_TYPE, ptr,
+                       "%s/%zu must be a finite number", ptr, i);
     out[i] = json_number_value(x);
   }
   return 0;
 }
 
-void api__from_diag(api_err *e, int rc, const ss_diag *d,
-                    const char *ptr_base) {
-  char p[160];
-  if (d->where[0] && ptr_base)
-    snprintf(p, sizeof p, "%s/%s", ptr_base, d->where);
-  else
-    snprintf(p, sizeof p, "%s", ptr_base ? ptr_base : "");
-  if (rc == SS_ENOMEM || rc == SS_EBUG)
-    api__fail(e, 500, "internal", NULL, "%s",
-              d->text[0] ? d->text : ss_strerror(rc));
-  else
-    api__fail(e, 422, "invalid-value", p, "%s",
-              d->text[0] ? d->text : ss_strerror(rc));
+/* ---- parameters ---------------------------------------------------------- */
+
+/* Every parameter is a required number, echoed back. */
+#define PARAM(type, m)                                                         \
+  {                                                                            \
+#m, API_T_NUMBER, API_REQUIRED | API_DEFAULT, 0, 0, NULL,                  \
+        offsetof(type, m)                                                      \
+  }
+static const api_field PARAM_FIELDS[] = {
+    PARAM(ss_params, chi), PARAM(ss_params, eta), PARAM(ss_params, us),
+    PARAM(ss_params, ur), PARAM(ss_params, V)};
+static const api_field PHYSICAL_FIELDS[] = {
+    PARAM(ss_physical, m1), PARAM(ss_physical, m2), PARAM(ss_physical, k1),
+    PARAM(ss_physical, k2), PARAM(ss_physical, Fs), PARAM(ss_physical, Fr),
+    PARAM(ss_physical, v0)};
+const api_spec API_PARAMS_SPEC = API_SPEC(PARAM_FIELDS);
+const api_spec API_PHYSICAL_SPEC = API_SPEC(PHYSICAL_FIELDS);
+
+void *api__alloc(size_t size, void **xp, const api_call *c) {
+  if (!(*xp = calloc(1, size)))
+    api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  return *xp;
 }
 
-const char *const API_PARAM_KEYS[] = {"chi", "eta", "us", "ur", "V", NULL};
-const char *const API_PHYS_KEYS[] = {"m1", "m2", "k1", "k2",
-                                     "Fs", "Fr", "v0", NULL};
+int api__decode_request(const api_spec *spec, const json_t *root, void *x,
+                        api_params *ap, const api_call *c) {
+  if (api__decode(spec, root, "", x, c))
+    return -1;
+  return api__params_resolve(ap, c);
+}
 
-int api__params(const json_t *root, api_params *ap, api_err *e) {
-  json_t *pp = NULL, *ph = NULL;
-  int a = api__object(root, "", "params", 0, &pp, e);
-  int b = api__object(root, "", "physical", 0, &ph, e);
+int api__model(ss_model *m, const api_params *ap, const api_call *c) {
   ss_diag d;
-  if (a < 0 || b < 0)
-    return -1;
-  memset(ap, 0, sizeof *ap);
-  ap->omega = 1;
-  if (a == 0 && b == 0)
-    return api__fail(e, 422, "invalid-value", "/physical",
-                     "give either params or physical, not both");
-  if (a == 1 && b == 1)
-    return api__fail(e, 422, "missing-field", "/params",
-                     "the parameters are missing: give params {chi, eta, us, "
-                     "ur, V} or physical {m1, m2, k1, k2, Fs, Fr, v0}");
+  int rc;
   ss_diag_clear(&d);
-  if (a == 0) {
-    double *dst[] = {&ap->p.chi, &ap->p.eta, &ap->p.us, &ap->p.ur, &ap->p.V};
-    if (api__keys(pp, "/params", API_PARAM_KEYS, e))
-      return -1;
-    for (int i = 0; i < 5; i++)
-      if (api__number(pp, "/params", API_PARAM_KEYS[i], 1, dst[i], e))
-        return -1;
-    int rc = ss_params_check(&ap->p, &d);
-    if (rc) {
-      api__from_diag(e, rc, &d, "/params");
-      return -1;
+  if ((rc = ss_model_init(m, &ap->p, &d)))
+    return api__from_diag(c->e, rc, &d, "/params");
+  return 0;
+}
+
+int api__params_resolve(api_params *ap, const api_call *c) {
+  ss_diag d;
+  int rc;
+  ss_diag_clear(&d);
+  ap->omega = 1;
+  if (ap->has_params)
+    rc = ss_params_check(&ap->p, &d);
+  else
+    rc = ss_params_from_physical(&ap->ph, &ap->p, &ap->omega, &d);
+  if (rc)
+    return api__from_diag(c->e, rc, &d,
+                          ap->has_params ? "/params" : "/physical");
+  return 0;
+}
+
+void api__params_echo(json_t *in, const api_params *ap) {
+  api__set(in, "params", api__echo(&API_PARAMS_SPEC, &ap->p));
+  if (ap->has_physical) {
+    api__set(in, "physical", api__echo(&API_PHYSICAL_SPEC, &ap->ph));
+    api__set(in, "omega", api__real(ap->omega));
+  }
+}
+
+int api__mode_of(const char *s, ss_mode *m) {
+  static const ss_mode all[] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
+  for (int i = 0; s && i < 3; i++)
+    if (strcmp(s, ss_mode_name(all[i])) == 0) {
+      *m = all[i];
+      return 0;
     }
-    return 0;
-  }
-  double *dst[] = {&ap->ph.m1, &ap->ph.m2, &ap->ph.k1, &ap->ph.k2,
-                   &ap->ph.Fs, &ap->ph.Fr, &ap->ph.v0};
-  if (api__keys(ph, "/physical", API_PHYS_KEYS, e))
+  return -1;
+}
+
+/* ---- phase sequences ----------------------------------------------------- */
+
+static int seq_length(const json_t *v, const char *ptr, const char *what,
+                      const api_call *c) {
+  if (!json_is_array(v) || json_array_size(v) < 2 ||
+      json_array_size(v) > SS_MAX_PHASES)
+    return api__fail(c->e, API_P_INVALID_TYPE, ptr,
+                     "%s must be an array of 2 to %d %s", ptr, SS_MAX_PHASES,
+                     what);
+  return (int)json_array_size(v);
+}
+
+static int decode_durations(const json_t *v, const char *ptr, void *dest,
+                            const api_call *c) {
+  api_durations *d = dest;
+  int n = seq_length(v, ptr, "durations", c);
+  if (n < 0 || api__numbers(v, ptr, d->v, c->e))
     return -1;
-  for (int i = 0; i < 7; i++)
-    if (api__number(ph, "/physical", API_PHYS_KEYS[i], 1, dst[i], e))
-      return -1;
-  int rc = ss_params_from_physical(&ap->ph, &ap->p, &ap->omega, &d);
-  if (rc) {
-    api__from_diag(e, rc, &d, "/physical");
+  for (int i = 0; i < n; i++)
+    if (!(d->v[i] > 0))
+      return api__fail(c->e, API_P_INVALID_VALUE, ptr,
+                       "%s/%d must be a number > 0", ptr, i);
+  d->n = n;
+  return 0;
+}
+
+static json_t *echo_durations(const void *dest) {
+  const api_durations *d = dest;
+  return api__vec(d->v, d->n);
+}
+
+static int decode_modes(const json_t *v, const char *ptr, void *dest,
+                        const api_call *c) {
+  api_modes *s = dest;
+  int n = seq_length(v, ptr, "mode names", c);
+  if (n < 0)
     return -1;
+  for (int i = 0; i < n; i++) {
+    json_t *x = json_array_get(v, (size_t)i);
+    char p[160];
+    snprintf(p, sizeof p, "%s/%d", ptr, i);
+    if (!json_is_string(x))
+      return api__fail(c->e, API_P_INVALID_TYPE, p, "%s must be a mode name",
+                       p);
+    if (api__mode_of(json_string_value(x), &s->m[i]))
+      return api__fail(c->e, API_P_INVALID_VALUE, p,
+                       "%s must be \"slip\", \"overshoot\" or \"stick\"", p);
   }
-  ap->physical = 1;
+  s->n = n;
+  return 0;
+}
+
+static json_t *echo_modes(const void *dest) {
+  const api_modes *s = dest;
+  json_t *a = json_array();
+  for (int i = 0; i < s->n; i++)
+    json_array_append_new(a, json_string(ss_mode_name(s->m[i])));
+  return a;
+}
+
+const api_custom API_DURATIONS = {decode_durations, echo_durations};
+const api_custom API_MODES = {decode_modes, echo_modes};
+
+int api__sequence(const api_modes *s, const char *ptr, const api_call *c) {
+  if (s->m[0] != SS_MODE_SLIP || s->m[s->n - 1] != SS_MODE_STICK)
+    return api__fail(c->e, API_P_INVALID_VALUE, ptr,
+                     "%s must start with slip (at the stick -> slip point) "
+                     "and end with stick",
+                     ptr);
+  for (int i = 1; i < s->n; i++)
+    if (s->m[i] == s->m[i - 1])
+      return api__fail(c->e, API_P_INVALID_VALUE, ptr,
+                       "%s repeats a mode in two consecutive phases", ptr);
   return 0;
 }

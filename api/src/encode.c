@@ -24,23 +24,111 @@ int api__set(json_t *obj, const char *key, json_t *v) {
   return json_object_set_new(obj, key, v);
 }
 
-json_t *api__params_echo(const api_params *ap) {
-  json_t *o = json_object();
-  json_t *p = json_object();
-  const double pv[] = {ap->p.chi, ap->p.eta, ap->p.us, ap->p.ur, ap->p.V};
-  for (int i = 0; API_PARAM_KEYS[i]; i++)
-    api__set(p, API_PARAM_KEYS[i], api__real(pv[i]));
-  api__set(o, "params", p);
-  if (ap->physical) {
-    json_t *ph = json_object();
-    const double hv[] = {ap->ph.m1, ap->ph.m2, ap->ph.k1, ap->ph.k2,
-                         ap->ph.Fs, ap->ph.Fr, ap->ph.v0};
-    for (int i = 0; API_PHYS_KEYS[i]; i++)
-      api__set(ph, API_PHYS_KEYS[i], api__real(hv[i]));
-    api__set(o, "physical", ph);
-    api__set(o, "omega", api__real(ap->omega));
+json_t *api__vec(const double *x, int n) {
+  json_t *a = json_array();
+  for (int i = 0; i < n; i++)
+    json_array_append_new(a, api__real(x[i]));
+  return a;
+}
+
+json_t *api__state(const api_params *ap, const double x[4]) {
+  double y[4];
+  ss_to_physical(ap->omega, 0, x, NULL, y);
+  return api__vec4(y);
+}
+
+int api__answer(json_t *out, const api_spec *spec, const void *x,
+                const api_params *ap, const api_call *c, api_response *resp) {
+  json_t *in = api__echo(spec, x);
+  api__params_echo(in, ap);
+  api__set(out, "input", in);
+  api__set(out, "units",
+           json_string(ap->has_physical ? "physical" : "dimensionless"));
+  api__set(out, "version", json_string(SS_VERSION));
+  return api__json_response(out, resp, c->e);
+}
+
+json_t *api__samples(const ss_sim_result *r, const api_params *ap) {
+  json_t *s = json_object(), *col[6];
+  static const char *const names[6] = {"t", "x1", "x2", "v1", "v2", "mode"};
+  for (int c = 0; c < 6; c++)
+    col[c] = json_array();
+  for (size_t i = 0; i < r->n_samples; i++) {
+    double t, x[4];
+    ss_to_physical(ap->omega, r->st[i], r->sx + 4 * i, &t, x);
+    json_array_append_new(col[0], api__real(t));
+    for (int c = 0; c < 4; c++)
+      json_array_append_new(col[1 + c], api__real(x[c]));
+    json_array_append_new(col[5],
+                          json_string(ss_mode_name((ss_mode)r->smode[i])));
   }
-  return o;
+  for (int c = 0; c < 6; c++)
+    api__set(s, names[c], col[c]);
+  return s;
+}
+
+json_t *api__phases(int n, const ss_mode *modes, const double *tau,
+                    const api_params *ap) {
+  json_t *a = json_array();
+  for (int k = 0; k < n; k++) {
+    json_t *p = json_object();
+    api__set(p, "mode", json_string(ss_mode_name(modes[k])));
+    api__set(p, "duration", api__real(api__time_out(ap, tau[k])));
+    json_array_append_new(a, p);
+  }
+  return a;
+}
+
+/* In physical units the map acts on (z1, z1'): J' = D J D^-1 with
+ * D = diag(1, omega). */
+json_t *api__jacobian(const double J[2][2], const api_params *ap) {
+  json_t *a = json_array();
+  for (int i = 0; i < 2; i++) {
+    json_t *row = json_array();
+    for (int j = 0; j < 2; j++) {
+      double s = (i == 1 ? ap->omega : 1) / (j == 1 ? ap->omega : 1);
+      json_array_append_new(row, api__real(J[i][j] * s));
+    }
+    json_array_append_new(a, row);
+  }
+  return a;
+}
+
+static const char *const STAB_NOTE =
+    "Stability of the fixed point of the Poincare map on the section (4.2) "
+    "in (z1, z1'): all eigenvalues inside the unit circle means small "
+    "perturbations, except during stick, stay near the orbit. This is "
+    "neither Lyapunov nor orbital stability (the paper, section 4).";
+
+json_t *api__stability(const ss_stab *st, const api_params *ap) {
+  json_t *s = json_object(), *ev = json_array();
+  for (int i = 0; i < 2; i++) {
+    json_t *p = json_array();
+    json_array_append_new(p, api__real(st->eig_re[i]));
+    json_array_append_new(p, api__real(st->eig_im[i]));
+    json_array_append_new(ev, p);
+  }
+  api__set(s, "eigenvalues", ev);
+  api__set(s, "spectral_radius", api__real(st->spectral_radius));
+  api__set(s, "stable", json_boolean(st->stable));
+  api__set(s, "jacobian", api__jacobian(st->jac, ap));
+  if (!isnan(st->jac_diff)) {
+    api__set(s, "jacobian_fd", api__jacobian(st->jac_fd, ap));
+    api__set(s, "jacobian_difference", api__real(st->jac_diff));
+  }
+  api__set(s, "note", json_string(STAB_NOTE));
+  return s;
+}
+
+int api__json_response(json_t *j, api_response *out, api_err *e) {
+  out->body = j ? api__dump(j, &out->len) : NULL;
+  json_decref(j);
+  if (!out->body)
+    return api__fail(e, API_P_OUT_OF_MEMORY, NULL,
+                     "the response could not be encoded: out of memory");
+  out->status = 200;
+  out->content_type = "application/json";
+  return 0;
 }
 
 /* ---- the response writer ----------------------------------------------- */

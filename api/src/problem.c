@@ -1,5 +1,6 @@
 /*
- * problem.c: RFC 9457 problem details.
+ * problem.c: RFC 9457 problem details, and the one table that turns a
+ * status of the core into an HTTP answer.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <stdarg.h>
@@ -9,103 +10,170 @@
 
 #include "codec.h"
 
-static const char *title_of(int status) {
+typedef struct problem_row {
+  int status;
+  const char *type, *title;
+} problem_row;
+
+static const problem_row PROBLEMS[API_P_COUNT] = {
+#define API_PROBLEM_ROW(name, status, type, title) {status, type, title},
+    API_PROBLEM_MAP(API_PROBLEM_ROW)
+#undef API_PROBLEM_ROW
+};
+
+/*
+ * The only place a failure status of the core becomes an HTTP answer.  The
+ * endpoint that met the status says which field is at fault (the pointer)
+ * and why (the detail); this table decides the status, type and title, the
+ * same for every endpoint.  A status that is not here is an internal error.
+ */
+#define API_STATUS_PROBLEM(X)                                                  \
+  X(SS_EDOMAIN, INVALID_VALUE)                                                 \
+  X(SS_EINVAL, INVALID_VALUE)                                                  \
+  X(SS_ESINGULAR, INVALID_VALUE)                                               \
+  X(SS_ENOCONV, NO_CONVERGENCE)                                                \
+  X(SS_ELIMIT_EVENTS, LIMIT)                                                   \
+  X(SS_ELIMIT_SAMPLES, LIMIT)                                                  \
+  X(SS_ELIMIT_TIME, LIMIT)                                                     \
+  X(SS_ENOMEM, OUT_OF_MEMORY)                                                  \
+  X(SS_EBUG, INTERNAL)
+
+static int kind_of_status(int status, api_problem_kind *kind) {
   switch (status) {
-  case 400:
-    return "Bad Request";
-  case 404:
-    return "Not Found";
-  case 405:
-    return "Method Not Allowed";
-  case 413:
-    return "Content Too Large";
-  case 415:
-    return "Unsupported Media Type";
-  case 422:
-    return "Unprocessable Content";
-  case 503:
-    return "Service Unavailable";
+#define API_STATUS_CASE(st, kind_name)                                         \
+  case st:                                                                     \
+    *kind = API_P_##kind_name;                                                 \
+    return 0;
+    API_STATUS_PROBLEM(API_STATUS_CASE)
+#undef API_STATUS_CASE
   default:
-    return status >= 500 ? "Internal Server Error" : "Client Error";
+    return -1;
   }
 }
 
-int api__fail(api_err *e, int status, const char *type, const char *pointer,
-              const char *fmt, ...) {
-  if (e->status)
+int api_problem_status(api_problem_kind kind) {
+  return (unsigned)kind < API_P_COUNT ? PROBLEMS[kind].status : 500;
+}
+
+static int vfail(api_err *e, api_problem_kind kind, const char *pointer,
+                 const char *fmt, va_list ap) {
+  if (e->set)
     return -1;
-  va_list ap;
-  e->status = status;
-  snprintf(e->type, sizeof e->type, "%s", type);
-  snprintf(e->title, sizeof e->title, "%s", title_of(status));
+  e->set = 1;
+  e->kind = (unsigned)kind < API_P_COUNT ? kind : API_P_INTERNAL;
   snprintf(e->pointer, sizeof e->pointer, "%s", pointer ? pointer : "");
-  va_start(ap, fmt);
   vsnprintf(e->detail, sizeof e->detail, fmt, ap);
+  return -1;
+}
+
+int api__fail(api_err *e, api_problem_kind kind, const char *pointer,
+              const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vfail(e, kind, pointer, fmt, ap);
   va_end(ap);
   return -1;
 }
 
 int api__limit(api_err *e, const char *limit, double value, const char *pointer,
                const char *fmt, ...) {
-  if (e->status)
-    return -1;
   va_list ap;
-  e->status = 422;
-  snprintf(e->type, sizeof e->type, "limit-exceeded");
-  snprintf(e->title, sizeof e->title, "Request over a limit");
-  snprintf(e->pointer, sizeof e->pointer, "%s", pointer ? pointer : "");
+  if (e->set)
+    return -1;
+  va_start(ap, fmt);
+  vfail(e, API_P_LIMIT, pointer, fmt, ap);
+  va_end(ap);
   snprintf(e->limit, sizeof e->limit, "%s", limit);
   e->limit_value = value;
+  return -1;
+}
+
+int api__status(api_err *e, int status, const char *pointer, const char *fmt,
+                ...) {
+  api_problem_kind kind;
+  va_list ap;
+  if (e->set)
+    return -1;
+  if (kind_of_status(status, &kind))
+    return api__fail(e, API_P_INTERNAL, NULL,
+                     "the core answered status %d (%s), which has no HTTP "
+                     "mapping",
+                     status, ss_status_name(status));
   va_start(ap, fmt);
-  vsnprintf(e->detail, sizeof e->detail, fmt, ap);
+  vfail(e, kind, kind == API_P_INTERNAL ? NULL : pointer, fmt, ap);
   va_end(ap);
   return -1;
 }
 
-void api__problem_response(const api_err *e, api_response *out) {
+int api__status_limit(api_err *e, int status, const char *limit, double value,
+                      const char *pointer, const char *fmt, ...) {
+  char detail[sizeof e->detail];
+  va_list ap;
+  if (e->set)
+    return -1;
+  va_start(ap, fmt);
+  vsnprintf(detail, sizeof detail, fmt, ap);
+  va_end(ap);
+  api__status(e, status, pointer, "%s", detail);
+  if (e->kind == API_P_LIMIT) {
+    snprintf(e->limit, sizeof e->limit, "%s", limit);
+    e->limit_value = value;
+  }
+  return -1;
+}
+
+int api__from_diag(api_err *e, int rc, const ss_diag *d, const char *base) {
+  char p[160];
+  if (d->where[0] && base)
+    snprintf(p, sizeof p, "%s/%s", base, d->where);
+  else
+    snprintf(p, sizeof p, "%s", base ? base : "");
+  return api__status(e, rc, p, "%s", d->text[0] ? d->text : ss_strerror(rc));
+}
+
+static void respond(api_response *out, api_problem_kind kind,
+                    const char *detail, const char *pointer, const char *limit,
+                    double limit_value) {
+  const problem_row *row = &PROBLEMS[kind];
   json_t *o = json_object();
   char type[96];
-  snprintf(type, sizeof type, "/problems/%s", e->type[0] ? e->type : "error");
+  snprintf(type, sizeof type, "/problems/%s", row->type);
   json_object_set_new(o, "type", json_string(type));
-  json_object_set_new(o, "title", json_string(e->title));
-  json_object_set_new(o, "status", json_integer(e->status));
-  json_object_set_new(o, "detail", json_string(e->detail));
-  if (e->pointer[0])
-    json_object_set_new(o, "pointer", json_string(e->pointer));
-  if (e->limit[0]) {
-    json_object_set_new(o, "limit", json_string(e->limit));
-    json_object_set_new(o, "limit_value", json_real(e->limit_value));
+  json_object_set_new(o, "title", json_string(row->title));
+  json_object_set_new(o, "status", json_integer(row->status));
+  json_object_set_new(o, "detail", json_string(detail ? detail : ""));
+  if (pointer && pointer[0])
+    json_object_set_new(o, "pointer", json_string(pointer));
+  if (limit && limit[0]) {
+    json_object_set_new(o, "limit", json_string(limit));
+    json_object_set_new(o, "limit_value", json_real(limit_value));
   }
-  out->status = e->status;
+  out->status = row->status;
   out->body = json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII);
   out->len = out->body ? strlen(out->body) : 0;
   out->content_type = "application/problem+json";
   json_decref(o);
   if (!out->body) {
     static const char fallback[] =
-        "{\"type\":\"/problems/internal\",\"title\":\"Internal Server "
-        "Error\",\"status\":500,\"detail\":\"out of memory\"}";
-    out->status = 500;
+        "{\"type\":\"/problems/out-of-memory\",\"title\":\"Service "
+        "Unavailable\",\"status\":503,\"detail\":\"out of memory\"}";
+    out->status = 503;
     out->body = strdup(fallback);
     out->len = out->body ? strlen(out->body) : 0;
   }
 }
 
-void api_problem(api_response *out, int status, const char *type,
-                 const char *title, const char *detail, const char *pointer,
-                 const char *limit, double limit_value) {
-  api_err e;
-  memset(&e, 0, sizeof e);
-  e.status = status;
-  snprintf(e.type, sizeof e.type, "%s", type ? type : "error");
-  snprintf(e.title, sizeof e.title, "%s", title ? title : title_of(status));
-  snprintf(e.detail, sizeof e.detail, "%s", detail ? detail : "");
-  snprintf(e.pointer, sizeof e.pointer, "%s", pointer ? pointer : "");
-  if (limit) {
-    snprintf(e.limit, sizeof e.limit, "%s", limit);
-    e.limit_value = limit_value;
-  }
-  api__problem_response(&e, out);
+void api__problem_response(const api_err *e, api_response *out) {
+  respond(out, e->set ? e->kind : API_P_INTERNAL,
+          e->set ? e->detail : "no answer was produced", e->pointer, e->limit,
+          e->limit_value);
+}
+
+void api_problem(api_response *out, api_problem_kind kind, const char *detail,
+                 const char *pointer, const char *limit, double limit_value) {
+  memset(out, 0, sizeof *out);
+  respond(out, (unsigned)kind < API_P_COUNT ? kind : API_P_INTERNAL, detail,
+          pointer, limit, limit_value);
 }
 
 void api_response_free(api_response *r) {

@@ -1,10 +1,13 @@
 /*
  * test_case.c: one codec case, without HTTP.  A case is a directory
  * tests/api/cases/<endpoint>-<name>/ with request.json (the body, sent as
- * is) and expect.json: {"status": N, "body": {...}}.  The expected body is
- * matched as a subset: every key it names must be in the answer with an
- * equal value (numbers to a relative 1e-9); arrays must match in length and
- * element by element.  Usage: test_case DIR
+ * is), expect.json: {"status": N, "body": {...}}, and optionally
+ * limits.json: {"max_seconds": 1e-6, ...}, limits that replace the defaults
+ * for this case.  <endpoint> is the label of a computing endpoint in the
+ * api's endpoint table.  The expected body is matched as a subset: every
+ * key it names must be in the answer with an equal value (numbers to a
+ * relative 1e-9); arrays must match in length and element by element.
+ * Usage: test_case DIR
  */
 #include <jansson.h>
 #include <math.h>
@@ -68,6 +71,41 @@ static int subset(json_t *want, json_t *got, char *path, size_t n) {
   return json_equal(want, got);
 }
 
+/* Limits from limits.json, if there is one: each key names a field of
+ * api_limits. */
+static int set_limits(const char *path, api_limits *lim) {
+  FILE *f = fopen(path, "rb");
+  if (!f)
+    return 0;
+  fclose(f);
+  json_t *j = json_load_file(path, 0, NULL);
+  const char *k;
+  json_t *v;
+  if (!json_is_object(j))
+    return -1;
+  json_object_foreach(j, k, v) {
+    double x = json_number_value(v);
+    if (!strcmp(k, "max_seconds"))
+      lim->max_seconds = x;
+    else if (!strcmp(k, "max_samples"))
+      lim->max_samples = (size_t)x;
+    else if (!strcmp(k, "max_events"))
+      lim->max_events = (size_t)x;
+    else if (!strcmp(k, "max_event_list"))
+      lim->max_event_list = (size_t)x;
+    else if (!strcmp(k, "max_horizon"))
+      lim->max_horizon = x;
+    else if (!strcmp(k, "max_orbits"))
+      lim->max_orbits = (int)x;
+    else {
+      json_decref(j);
+      return -1;
+    }
+  }
+  json_decref(j);
+  return 0;
+}
+
 int main(int argc, char **argv) {
   char path[4096], where[512] = "";
   size_t len, elen;
@@ -76,15 +114,17 @@ int main(int argc, char **argv) {
   ss_gsl_quiet();
   const char *base = strrchr(argv[1], '/');
   base = base ? base + 1 : argv[1];
-  api_endpoint ep;
-  if (!strncmp(base, "orbit-", 6))
-    ep = API_ORBIT;
-  else if (!strncmp(base, "simulate-", 9))
-    ep = API_SIMULATE;
-  else if (!strncmp(base, "stability-", 10))
-    ep = API_STABILITY;
-  else {
-    fprintf(stderr, "%s: the name must start with an endpoint\n", base);
+  size_t ep = api_endpoint_count();
+  for (size_t i = 0; i < api_endpoint_count(); i++) {
+    const api_endpoint *row = api_endpoint_at(i);
+    size_t n = strlen(row->label);
+    if (row->run_class == API_RUN_COMPUTE && !strncmp(base, row->label, n) &&
+        base[n] == '-')
+      ep = i;
+  }
+  if (ep == api_endpoint_count()) {
+    fprintf(stderr, "%s: the name must start with a computing endpoint\n",
+            base);
     return 2;
   }
   snprintf(path, sizeof path, "%s/request.json", argv[1]);
@@ -98,8 +138,13 @@ int main(int argc, char **argv) {
   }
   api_limits lim;
   api_limits_default(&lim);
+  snprintf(path, sizeof path, "%s/limits.json", argv[1]);
+  if (set_limits(path, &lim)) {
+    fprintf(stderr, "%s: bad limits.json\n", base);
+    return 2;
+  }
   api_response r;
-  int st = api_handle(ep, req, len, &lim, &r);
+  int st = api_handle(ep, req, len, &lim, NULL, &r);
   json_t *got = json_loads(r.body, 0, NULL);
   int ok =
       got && st == (int)json_integer_value(json_object_get(want, "status"));

@@ -1,0 +1,143 @@
+/*
+ * endpoints.c: the endpoint table at work: routing, and one request served
+ * as parse -> decode -> run -> encode.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "endpoints.h"
+
+typedef struct ep_row {
+  api_endpoint pub;
+  ep_decode_fn *decode;
+  ep_run_fn *run;
+  ep_encode_fn *encode;
+  ep_release_fn *release;
+} ep_row;
+
+static const ep_row ENDPOINTS[] = {
+#define API_EP_ROW(name, method, path, label, cls, dec, run, enc, rel)         \
+  {{method, path, label, cls}, dec, run, enc, rel},
+    API_ENDPOINTS(API_EP_ROW)
+#undef API_EP_ROW
+};
+
+#define N_ENDPOINTS (sizeof ENDPOINTS / sizeof ENDPOINTS[0])
+
+size_t api_endpoint_count(void) { return N_ENDPOINTS; }
+
+const api_endpoint *api_endpoint_at(size_t i) {
+  return i < N_ENDPOINTS ? &ENDPOINTS[i].pub : NULL;
+}
+
+int api_route(const char *method, const char *path, size_t *index) {
+  for (size_t i = 0; i < N_ENDPOINTS; i++) {
+    const api_endpoint *ep = &ENDPOINTS[i].pub;
+    if (strcmp(path, ep->path) != 0)
+      continue;
+    *index = i;
+    if (strcmp(method, ep->method) == 0 ||
+        (strcmp(method, "HEAD") == 0 && strcmp(ep->method, "GET") == 0))
+      return 200;
+    return 405;
+  }
+  return 404;
+}
+
+void api_limits_default(api_limits *l) {
+  l->max_body = 1 << 20;
+  l->max_samples = 100000;
+  l->max_events = 2000000;
+  l->max_event_list = 100000;
+  l->max_horizon = 1e7;
+  l->max_seconds = 10;
+  l->max_orbits = 32;
+  l->max_depth = 32;
+}
+
+const char *api_version(void) { return SS_VERSION; }
+
+/* Nesting depth of a JSON text, outside strings; stops counting past max.
+ * jansson's own limit (2048) is far above what a request needs. */
+static int too_deep(const char *s, size_t n, int max) {
+  int depth = 0, in_str = 0;
+  for (size_t i = 0; i < n; i++) {
+    char c = s[i];
+    if (in_str) {
+      if (c == '\\')
+        i++;
+      else if (c == '"')
+        in_str = 0;
+    } else if (c == '"') {
+      in_str = 1;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max)
+        return 1;
+    } else if (c == ']' || c == '}') {
+      depth--;
+    }
+  }
+  return 0;
+}
+
+/* The body as a JSON object, or NULL with the problem in e. */
+static json_t *parse(const char *body, size_t len, const api_limits *lim,
+                     api_err *e) {
+  json_error_t jerr;
+  json_t *root;
+  if (len == 0) {
+    api__fail(e, API_P_INVALID_JSON, NULL,
+              "the request body is empty; send a JSON object");
+    return NULL;
+  }
+  if (too_deep(body, len, lim->max_depth)) {
+    api__fail(e, API_P_INVALID_JSON, NULL,
+              "the JSON nesting is deeper than %d levels", lim->max_depth);
+    return NULL;
+  }
+  root = json_loadb(body, len, JSON_REJECT_DUPLICATES, &jerr);
+  if (!root) {
+    api__fail(e, API_P_INVALID_JSON, NULL,
+              "the body is not valid JSON: %s (line %d, column %d)", jerr.text,
+              jerr.line, jerr.column);
+    return NULL;
+  }
+  if (!json_is_object(root)) {
+    json_decref(root);
+    api__fail(e, API_P_INVALID_TYPE, "",
+              "the request body must be a JSON object");
+    return NULL;
+  }
+  return root;
+}
+
+int api_handle(size_t index, const char *body, size_t len,
+               const api_limits *lim, const api_server_info *srv,
+               api_response *out) {
+  api_err e;
+  api_call c = {lim, srv, &e};
+  json_t *root = NULL;
+  void *x = NULL;
+  memset(&e, 0, sizeof e);
+  memset(out, 0, sizeof *out);
+  if (index >= N_ENDPOINTS) {
+    api__fail(&e, API_P_NOT_FOUND, NULL, "no such endpoint");
+    api__problem_response(&e, out);
+    return out->status;
+  }
+  const ep_row *ep = &ENDPOINTS[index];
+  if (ep->pub.run_class == API_RUN_COMPUTE &&
+      !(root = parse(body ? body : "", len, lim, &e))) {
+    api__problem_response(&e, out);
+    return out->status;
+  }
+  if (ep->decode(root, &c, &x) == 0 && ep->run(x, &c) == 0)
+    ep->encode(x, &c, out);
+  ep->release(x);
+  json_decref(root);
+  if (e.set) {
+    api_response_free(out);
+    api__problem_response(&e, out);
+  }
+  return out->status;
+}

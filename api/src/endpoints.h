@@ -1,0 +1,62 @@
+/*
+ * endpoints.h: the only list of endpoints.
+ *
+ * One row per endpoint: its name, method, path, metrics label, run class,
+ * and the four functions that serve it.  Routing (api_route), the server's
+ * metrics, the codec case runner and the check of api/openapi.yaml all read
+ * this table through api_endpoint_at(); nothing else lists endpoints.
+ *
+ * An endpoint is served as decode -> run -> encode:
+ *   decode  the request body (parsed JSON object) into the endpoint's own
+ *           struct, allocated by decode in *x: fields checked, units of the
+ *           request converted to dimensionless core structs;
+ *   run     the core computation on *x;
+ *   encode  *x into the answer;
+ *   release frees *x (NULL-safe), whatever step failed.
+ * Each returns 0, or -1 with the problem recorded in c->e.  For an inline
+ * (GET) endpoint there is no body: decode and run may do nothing.
+ *
+ * Adding an endpoint: write api/src/ep_<name>.c with its four functions,
+ * add its row here and its path to api/openapi.yaml (a test checks that the
+ * two agree).
+ */
+#ifndef SS_API_ENDPOINTS_H
+#define SS_API_ENDPOINTS_H
+
+#include "codec.h"
+
+/*     name       method  path             label        class
+ *     decode                 run                  encode
+ *     release */
+#define API_ENDPOINTS(X)                                                       \
+  X(ORBIT, "POST", "/orbit", "orbit", API_RUN_COMPUTE, ep_orbit_decode,        \
+    ep_orbit_run, ep_orbit_encode, ep_orbit_release)                           \
+  X(SIMULATE, "POST", "/simulate", "simulate", API_RUN_COMPUTE,                \
+    ep_simulate_decode, ep_simulate_run, ep_simulate_encode,                   \
+    ep_simulate_release)                                                       \
+  X(STABILITY, "POST", "/stability", "stability", API_RUN_COMPUTE,             \
+    ep_stability_decode, ep_stability_run, ep_stability_encode,                \
+    ep_stability_release)                                                      \
+  X(HEALTH, "GET", "/health", "health", API_RUN_INLINE, ep_meta_decode,        \
+    ep_meta_run, ep_health_encode, ep_meta_release)                            \
+  X(VERSION, "GET", "/version", "version", API_RUN_INLINE, ep_meta_decode,     \
+    ep_meta_run, ep_version_encode, ep_meta_release)                           \
+  X(OPENAPI, "GET", "/openapi.json", "openapi", API_RUN_INLINE,                \
+    ep_meta_decode, ep_meta_run, ep_openapi_encode, ep_meta_release)           \
+  X(METRICS, "GET", "/metrics", "metrics", API_RUN_INLINE, ep_meta_decode,     \
+    ep_meta_run, ep_metrics_encode, ep_meta_release)
+
+typedef int ep_decode_fn(const json_t *root, const api_call *c, void **x);
+typedef int ep_run_fn(void *x, const api_call *c);
+typedef int ep_encode_fn(const void *x, const api_call *c, api_response *out);
+typedef void ep_release_fn(void *x);
+
+#define API_EP_DECLARE(name, method, path, label, cls, dec, run, enc, rel)     \
+  ep_decode_fn dec;                                                            \
+  ep_run_fn run;                                                               \
+  ep_encode_fn enc;                                                            \
+  ep_release_fn rel;
+API_ENDPOINTS(API_EP_DECLARE)
+#undef API_EP_DECLARE
+
+#endif

@@ -1,0 +1,247 @@
+/*
+ * ep_orbit.c: POST /orbit, the periodic orbits for given parameters, with
+ * no guess (the core's search) or from a guess of the phase durations.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "endpoints.h"
+
+static const char *const KINDS[] = {"overshoot", "stick-slip", "other", "all",
+                                    NULL};
+static const unsigned KIND_MASK[] = {SS_ORBIT_OVERSHOOT, SS_ORBIT_STICKSLIP,
+                                     SS_ORBIT_OTHER, SS_ORBIT_ALL};
+
+typedef struct orbit_guess {
+  api_durations durations;
+  api_modes modes;
+  int has_modes;
+} orbit_guess;
+
+typedef struct orbit_x {
+  /* the request, in its own units */
+  api_params ap;
+  int kind;
+  orbit_guess guess;
+  int has_guess;
+  long long samples, effort, max_period;
+  int finite_difference;
+  /* for the core, dimensionless */
+  ss_model m;
+  ss_orbit_opts opts;
+  /* the answer */
+  ss_orbit *orbits; /* room for max_orbits */
+  int n;
+  ss_orbit_report rep;
+  ss_sim_result *paths; /* n sampled periods when samples > 0 */
+} orbit_x;
+
+static const api_field GUESS_FIELDS[] = {
+    {"durations", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL,
+     offsetof(orbit_guess, durations), 0, 0, 0, &API_DURATIONS},
+    {"modes", API_T_CUSTOM, API_DEFAULT, 0, 0, NULL,
+     offsetof(orbit_guess, modes), API_HAS(orbit_guess, has_modes), 0, 0,
+     &API_MODES},
+};
+static const api_spec GUESS_SPEC = API_SPEC(GUESS_FIELDS);
+
+static const api_field FIELDS[] = {
+    API_PARAMS_FIELDS(orbit_x, ap),
+    {"kind", API_T_ENUM, API_DEFAULT, 0, 0, NULL, offsetof(orbit_x, kind), 0, 0,
+     0, KINDS},
+    {"guess", API_T_OBJECT, 0, 0, 0, NULL, offsetof(orbit_x, guess),
+     API_HAS(orbit_x, has_guess), 0, 0, &GUESS_SPEC},
+    {"samples", API_T_COUNT, API_DEFAULT, 0, 1e9, "max_samples",
+     offsetof(orbit_x, samples)},
+    {"effort", API_T_COUNT, API_DEFAULT, 1, 3, NULL, offsetof(orbit_x, effort)},
+    {"max_period", API_T_COUNT, API_DEFAULT, 1, 8, NULL,
+     offsetof(orbit_x, max_period)},
+    {"finite_difference", API_T_BOOL, API_DEFAULT, 0, 0, NULL,
+     offsetof(orbit_x, finite_difference)},
+};
+static const api_spec SPEC = API_SPEC(FIELDS);
+
+/* The guess's modes: as given, or by the number of durations (3: slip,
+ * overshoot, stick; 2: slip, stick). */
+static int guess_modes(orbit_guess *g, const api_call *c) {
+  static const ss_mode ov[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
+  static const ss_mode ss[2] = {SS_MODE_SLIP, SS_MODE_STICK};
+  int n = g->durations.n;
+  if (g->has_modes) {
+    if (g->modes.n != n)
+      return api__fail(c->e, API_P_INVALID_TYPE, "/guess/modes",
+                       "/guess/modes must have one entry per duration");
+    return api__sequence(&g->modes, "/guess/modes", c);
+  }
+  if (n > 3)
+    return api__fail(c->e, API_P_MISSING_FIELD, "/guess/modes",
+                     "a guess with more than 3 durations needs its modes");
+  memcpy(g->modes.m, n == 3 ? ov : ss, (size_t)n * sizeof(ss_mode));
+  g->modes.n = n;
+  return 0;
+}
+
+/* Every conversion of the request's units into the core's options. */
+static void to_core(orbit_x *x, const api_limits *lim) {
+  ss_orbit_opts *o = &x->opts;
+  o->kinds = KIND_MASK[x->kind];
+  if (x->has_guess) {
+    o->n_guess = x->guess.durations.n;
+    for (int k = 0; k < o->n_guess; k++)
+      o->guess[k] = api__time_in(&x->ap, x->guess.durations.v[k]);
+    memcpy(o->guess_modes, x->guess.modes.m,
+           (size_t)o->n_guess * sizeof(ss_mode));
+  }
+  o->effort = (int)x->effort;
+  o->max_period = (int)x->max_period;
+  o->difference_check = x->finite_difference;
+  o->max_seconds = lim->max_seconds;
+}
+
+int ep_orbit_decode(const json_t *root, const api_call *c, void **xp) {
+  orbit_x *x = api__alloc(sizeof *x, xp, c);
+  if (!x)
+    return -1;
+  x->kind = 3; /* all */
+  x->effort = 2;
+  x->max_period = 4;
+  x->finite_difference = 1;
+  if (api__decode_request(&SPEC, root, x, &x->ap, c) ||
+      (x->has_guess && guess_modes(&x->guess, c)))
+    return -1;
+  to_core(x, c->lim);
+  return api__model(&x->m, &x->ap, c);
+}
+
+/* One period of each orbit, sampled evenly, for plotting. */
+static int sample_paths(orbit_x *x, const api_call *c) {
+  if (x->samples == 0 || x->n == 0)
+    return 0;
+  if (!(x->paths = calloc((size_t)x->n, sizeof *x->paths)))
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  for (int i = 0; i < x->n; i++) {
+    const ss_orbit *o = &x->orbits[i];
+    ss_sim_opts so;
+    memset(&so, 0, sizeof so);
+    so.t_end = o->period;
+    so.n_samples = (size_t)x->samples;
+    so.sample_to = o->period;
+    so.max_events = 64 * (size_t)o->n_phases;
+    so.max_seconds = c->lim->max_seconds;
+    int rc = ss_simulate(&x->m, o->x0, &so, &x->paths[i], NULL);
+    if (rc != SS_OK)
+      ss_sim_result_free(&x->paths[i]);
+  }
+  return 0;
+}
+
+int ep_orbit_run(void *xp, const api_call *c) {
+  orbit_x *x = xp;
+  const api_limits *lim = c->lim;
+  int max_out = lim->max_orbits > 0 ? lim->max_orbits : 1;
+  ss_diag d;
+  if (!(x->orbits = calloc((size_t)max_out, sizeof *x->orbits)))
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  ss_diag_clear(&d);
+  int rc =
+      ss_orbit_find(&x->m, &x->opts, x->orbits, max_out, &x->n, &x->rep, &d);
+  if (rc == SS_ELIMIT_TIME)
+    return api__status_limit(c->e, rc, "max_seconds", lim->max_seconds, "",
+                             "the orbit search needed more than %g s; lower "
+                             "effort or max_period, or give a guess",
+                             lim->max_seconds);
+  if (rc)
+    return api__from_diag(c->e, rc, &d, "");
+  if ((size_t)x->samples * (size_t)(x->n ? x->n : 1) > lim->max_samples)
+    return api__limit(c->e, "max_samples", (double)lim->max_samples, "/samples",
+                      "%lld samples for each of %d orbits is over the limit "
+                      "of %zu",
+                      x->samples, x->n, lim->max_samples);
+  return sample_paths(x, c);
+}
+
+/* A margin: its value stays dimensionless (velocities in units of V's,
+ * forces as chi (x2 - x1), in units of k1 + k2), its place t in the time unit
+ * of the request. */
+static json_t *margin_json(const ss_margin *mg, const api_params *ap) {
+  json_t *o = json_object();
+  api__set(o, "value", api__real(mg->value));
+  if (mg->phase >= 0) {
+    api__set(o, "phase", json_integer(mg->phase));
+    api__set(o, "t", api__real(api__time_out(ap, mg->t)));
+  }
+  return o;
+}
+
+static json_t *margins_json(const ss_orbit *o, const api_params *ap) {
+  json_t *mg = json_object();
+  api__set(mg, "slip_below_V", margin_json(&o->slip_below, ap));
+  api__set(mg, "overshoot_above_V", margin_json(&o->over_above, ap));
+  api__set(mg, "stick_below_ur", margin_json(&o->stick_upper, ap));
+  api__set(mg, "stick_above_minus_ur", margin_json(&o->stick_lower, ap));
+  api__set(mg, "switching", margin_json(&o->switching, ap));
+  api__set(mg, "transversality", margin_json(&o->transversal, ap));
+  api__set(mg, "min", margin_json(&o->min_margin, ap));
+  api__set(mg, "units",
+           json_string(ap->has_physical ? "values dimensionless; t in the "
+                                          "time unit of the request"
+                                        : "dimensionless"));
+  return mg;
+}
+
+static json_t *orbit_json(const ss_orbit *o, const ss_sim_result *path,
+                          const api_params *ap) {
+  json_t *j = json_object();
+  api__set(j, "kind", json_string(ss_orbit_kind_name(o->kind)));
+  api__set(j, "phases", api__phases(o->n_phases, o->modes, o->durations, ap));
+  api__set(j, "period", api__real(api__time_out(ap, o->period)));
+  api__set(j, "n_turns", json_integer(o->n_turns));
+  api__set(j, "z0", api__state(ap, o->z0));
+  api__set(j, "x0", api__state(ap, o->x0));
+  api__set(j, "margins", margins_json(o, ap));
+  api__set(j, "residual", api__real(o->residual));
+  api__set(j, "closure", api__real(o->closure));
+  api__set(j, "stability", api__stability(&o->stab, ap));
+  api__set(j, "iterations", json_integer(o->iterations));
+  api__set(j, "source", json_string(ss_orbit_source_name(o->source)));
+  if (path && path->n_samples)
+    api__set(j, "samples", api__samples(path, ap));
+  return j;
+}
+
+static json_t *search_json(const orbit_x *x) {
+  const ss_orbit_report *rep = &x->rep;
+  json_t *se = json_object();
+  api__set(se, "method", json_string(x->has_guess ? "guess" : "search"));
+  api__set(se, "simulations", json_integer(rep->simulations));
+  api__set(se, "newton_starts", json_integer(rep->newton_starts));
+  api__set(se, "roots", json_integer(rep->roots));
+  api__set(se, "infeasible", json_integer(rep->infeasible));
+  api__set(se, "duplicates", json_integer(rep->duplicates));
+  api__set(se, "truncated", json_integer(rep->truncated));
+  return se;
+}
+
+int ep_orbit_encode(const void *xp, const api_call *c, api_response *out) {
+  const orbit_x *x = xp;
+  json_t *o = json_object(), *arr = json_array();
+  for (int i = 0; i < x->n; i++)
+    json_array_append_new(
+        arr, orbit_json(&x->orbits[i], x->paths ? &x->paths[i] : NULL, &x->ap));
+  api__set(o, "orbits", arr);
+  if (x->rep.reason[0])
+    api__set(o, "reason", json_string(x->rep.reason));
+  api__set(o, "search", search_json(x));
+  return api__answer(o, &SPEC, x, &x->ap, c, out);
+}
+
+void ep_orbit_release(void *xp) {
+  orbit_x *x = xp;
+  if (!x)
+    return;
+  for (int i = 0; x->paths && i < x->n; i++)
+    ss_sim_result_free(&x->paths[i]);
+  free(x->paths);
+  free(x->orbits);
+  free(x);
+}

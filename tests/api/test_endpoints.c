@@ -1,0 +1,155 @@
+/*
+ * test_endpoints.c: the endpoint table against the OpenAPI document and the
+ * codec cases.  Every row of the table is a path and method of
+ * api/openapi.yaml and every path and method there is a row; labels are
+ * unique; routing finds each row, refuses another method with 405 and an
+ * unknown path with 404; every computing endpoint has codec cases.
+ * Usage: test_endpoints CASES_DIR
+ */
+#include <ctype.h>
+#include <dirent.h>
+#include <jansson.h>
+#include <string.h>
+
+#include "stickslip_api.h"
+#include "test.h"
+
+/* EVIDENCE: README "Layout": the endpoint table is the only list of
+ * endpoints, and the OpenAPI document agrees with it */
+static void test_spec_and_table(void) {
+  json_t *spec = json_loads(api_openapi_json(), 0, NULL);
+  json_t *paths = json_object_get(spec, "paths");
+  size_t n = api_endpoint_count(), in_spec = 0;
+  ASSERT_TRUE(json_is_object(paths));
+  ASSERT_TRUE(n >= 7);
+  for (size_t i = 0; i < n; i++) {
+    const api_endpoint *row = api_endpoint_at(i);
+    char method[8];
+    size_t k = 0;
+    for (; row->method[k] && k + 1 < sizeof method; k++)
+      method[k] = (char)tolower((unsigned char)row->method[k]);
+    method[k] = 0;
+    json_t *item = json_object_get(paths, row->path);
+    if (!json_object_get(item, method))
+      TEST_FAIL_("%s %s is in the table but not in openapi.yaml", row->method,
+                 row->path);
+    for (size_t j = 0; j < i; j++)
+      if (!strcmp(api_endpoint_at(j)->label, row->label) ||
+          !strcmp(api_endpoint_at(j)->path, row->path))
+        TEST_FAIL_("rows %zu and %zu share a label or a path", j, i);
+    size_t got = n;
+    ASSERT_EQ_INT(api_route(row->method, row->path, &got), 200);
+    ASSERT_TRUE(got == i);
+    ASSERT_EQ_INT(api_route("DELETE", row->path, &got), 405);
+    ASSERT_TRUE(got == i);
+    /* an inline endpoint takes no body: GET, and HEAD as GET */
+    if (row->run_class == API_RUN_INLINE) {
+      ASSERT_TRUE(!strcmp(row->method, "GET"));
+      ASSERT_EQ_INT(api_route("HEAD", row->path, &got), 200);
+    } else {
+      ASSERT_TRUE(!strcmp(row->method, "POST"));
+    }
+  }
+  const char *path;
+  json_t *item;
+  json_object_foreach(paths, path, item) {
+    const char *m;
+    json_t *op;
+    json_object_foreach(item, m, op) {
+      char method[8];
+      size_t k = 0, got;
+      for (; m[k] && k + 1 < sizeof method; k++)
+        method[k] = (char)toupper((unsigned char)m[k]);
+      method[k] = 0;
+      if (api_route(method, path, &got) != 200)
+        TEST_FAIL_("%s %s is in openapi.yaml but not in the table", method,
+                   path);
+      in_spec++;
+    }
+  }
+  ASSERT_TRUE(in_spec == n);
+  size_t got;
+  ASSERT_EQ_INT(api_route("GET", "/nope", &got), 404);
+  ASSERT_EQ_INT(api_route("GET", "//orbit", &got), 404);
+  ASSERT_TRUE(api_endpoint_at(n) == NULL);
+  json_decref(spec);
+}
+
+/* EVIDENCE: README "Layout": each computing endpoint has codec cases */
+static void test_cases_cover_table(const char *dir) {
+  for (size_t i = 0; i < api_endpoint_count(); i++) {
+    const api_endpoint *row = api_endpoint_at(i);
+    if (row->run_class != API_RUN_COMPUTE)
+      continue;
+    DIR *d = opendir(dir);
+    struct dirent *de;
+    int cases = 0;
+    size_t l = strlen(row->label);
+    while (d && (de = readdir(d)))
+      cases += !strncmp(de->d_name, row->label, l) && de->d_name[l] == '-';
+    if (d)
+      closedir(d);
+    if (cases < 3)
+      TEST_FAIL_("%s has %d codec cases in %s, want at least 3", row->path,
+                 cases, dir);
+    test_checks_++;
+  }
+}
+
+/* EVIDENCE: README "Errors": every problem type has one HTTP status, and
+ * the OpenAPI document lists exactly the types the table has */
+static void test_problem_table(void) {
+  json_t *spec = json_loads(api_openapi_json(), 0, NULL);
+  json_t *types = json_object_get(
+      json_object_get(
+          json_object_get(
+              json_object_get(
+                  json_object_get(json_object_get(spec, "components"),
+                                  "schemas"),
+                  "Problem"),
+              "properties"),
+          "type"),
+      "enum");
+  size_t listed = 0;
+  for (int k = 0; k < API_P_COUNT; k++) {
+    api_response r;
+    api_problem(&r, (api_problem_kind)k, "x", NULL, NULL, 0);
+    json_t *body = json_loads(r.body, 0, NULL);
+    const char *type = json_string_value(json_object_get(body, "type"));
+    int found = 0;
+    for (size_t i = 0; type && i < json_array_size(types); i++)
+      found |= !strcmp(type, json_string_value(json_array_get(types, i)));
+    if (!found)
+      TEST_FAIL_("problem type %s is not in openapi.yaml", type ? type : "?");
+    test_checks_++;
+    ASSERT_EQ_INT(r.status, api_problem_status((api_problem_kind)k));
+    json_decref(body);
+    api_response_free(&r);
+  }
+  /* two kinds share "limit-exceeded" (413 for the body, 422 otherwise) */
+  listed = json_array_size(types);
+  ASSERT_TRUE(listed + 1 == (size_t)API_P_COUNT);
+  json_decref(spec);
+
+  ASSERT_EQ_INT(api_problem_status(API_P_INVALID_JSON), 400);
+  ASSERT_EQ_INT(api_problem_status(API_P_LIMIT), 422);
+  ASSERT_EQ_INT(api_problem_status(API_P_OUT_OF_MEMORY), 503);
+  ASSERT_EQ_INT(api_problem_status(API_P_COUNT), 500);
+  api_response r;
+  api_problem(&r, API_P_METHOD_NOT_ALLOWED, "GET only", NULL, NULL, 0);
+  ASSERT_EQ_INT(r.status, 405);
+  ASSERT_TRUE(strstr(r.body, "\"type\":\"/problems/method-not-allowed\""));
+  ASSERT_TRUE(!strcmp(r.content_type, "application/problem+json"));
+  api_response_free(&r);
+}
+
+int main(int argc, char **argv) {
+  if (argc < 2) {
+    fprintf(stderr, "usage: test_endpoints CASES_DIR\n");
+    return 2;
+  }
+  test_spec_and_table();
+  test_cases_cover_table(argv[1]);
+  test_problem_table();
+  TEST_DONE();
+}
