@@ -24,8 +24,6 @@
 #include <time.h>
 #include <unistd.h>
 
-#include <gsl/gsl_version.h>
-#include <jansson.h>
 #include <microhttpd.h>
 
 #include "server.h"
@@ -37,13 +35,14 @@ struct srv_daemon {
   struct MHD_Daemon *mhd;
   srv_config cfg;
   sem_t slots;
-  srv_metrics metrics;
+  srv_metrics *metrics;
+  char transport[48];
   atomic_int draining;
   double started;
 };
 
 typedef struct req {
-  int ep;
+  size_t ep; /* endpoint index; api_endpoint_count() until routed */
   int is_post;
   int status;
   int done; /* a response was queued */
@@ -58,7 +57,7 @@ typedef struct req {
    * slowly (about 200 us each, serialised), so only the 413 that must stop a
    * large body is queued that early. */
   int p_status;
-  const char *p_type;
+  api_problem_kind p_kind;
   const char *p_allow;
   char p_detail[128];
 } req;
@@ -96,86 +95,40 @@ static enum MHD_Result send_body(struct MHD_Connection *c, req *r, int status,
   return ok;
 }
 
+/* An answer of the api: a 503 always says when to come back, and a 413 or
+ * 503 closes the connection. */
 static enum MHD_Result send_api(struct MHD_Connection *c, req *r,
-                                api_response *ar, int retry_after,
-                                const char *allow, int close) {
+                                api_response *ar, const char *allow) {
+  int busy = ar->status == 503;
   enum MHD_Result ok =
-      send_body(c, r, ar->status, ar->body, ar->len, ar->content_type, 1,
-                retry_after, allow, close);
+      send_body(c, r, ar->status, ar->body, ar->len, ar->content_type, 1, busy,
+                allow, busy || ar->status == 413);
   ar->body = NULL;
   return ok;
 }
 
 static enum MHD_Result send_problem(struct MHD_Connection *c, req *r,
-                                    int status, const char *type,
-                                    const char *detail, const char *limit,
-                                    double limit_value, const char *allow) {
+                                    api_problem_kind kind, const char *detail,
+                                    const char *limit, double limit_value,
+                                    const char *allow) {
   api_response ar;
-  api_problem(&ar, status, type, NULL, detail, NULL, limit, limit_value);
-  return send_api(c, r, &ar, status == 503, allow,
-                  status == 413 || status == 503);
+  api_problem(&ar, kind, detail, NULL, limit, limit_value);
+  return send_api(c, r, &ar, allow);
 }
 
-static enum MHD_Result send_json(struct MHD_Connection *c, req *r, json_t *o) {
-  char *s = json_dumps(o, JSON_COMPACT | JSON_REAL_PRECISION(17));
-  json_decref(o);
-  if (!s)
-    return send_problem(c, r, 500, "internal", "out of memory", NULL, 0, NULL);
-  return send_body(c, r, 200, s, strlen(s), "application/json", 1, 0, NULL, 0);
+static char *metrics_text(void *cls) {
+  return srv_metrics_render(((struct srv_daemon *)cls)->metrics);
 }
 
-typedef struct route {
-  const char *path;
-  const char *method;
-  int ep;
-} route;
-
-static const route ROUTES[] = {
-    {"/orbit", "POST", SRV_EP_ORBIT},
-    {"/simulate", "POST", SRV_EP_SIMULATE},
-    {"/stability", "POST", SRV_EP_STABILITY},
-    {"/health", "GET", SRV_EP_HEALTH},
-    {"/version", "GET", SRV_EP_VERSION},
-    {"/openapi.json", "GET", SRV_EP_OPENAPI},
-    {"/metrics", "GET", SRV_EP_METRICS},
-};
-
-static enum MHD_Result serve_get(struct srv_daemon *d, struct MHD_Connection *c,
-                                 req *r) {
-  json_t *o;
-  switch (r->ep) {
-  case SRV_EP_HEALTH:
-    o = json_object();
-    json_object_set_new(o, "status", json_string("ok"));
-    json_object_set_new(o, "version", json_string(api_version()));
-    json_object_set_new(o, "uptime_seconds", json_real(now() - d->started));
-    json_object_set_new(o, "in_flight",
-                        json_integer(atomic_load(&d->metrics.in_flight)));
-    return send_json(c, r, o);
-  case SRV_EP_VERSION:
-    o = json_object();
-    json_object_set_new(o, "service", json_string("stickslipd"));
-    json_object_set_new(o, "version", json_string(api_version()));
-    json_object_set_new(o, "gsl", json_string(GSL_VERSION));
-    json_object_set_new(o, "jansson", json_string(JANSSON_VERSION));
-    json_object_set_new(o, "microhttpd", json_string(MHD_get_version()));
-    return send_json(c, r, o);
-  case SRV_EP_OPENAPI: {
-    const char *s = api_openapi_json();
-    return send_body(c, r, 200, (char *)s, strlen(s), "application/json", 0, 0,
-                     NULL, 0);
-  }
-  case SRV_EP_METRICS: {
-    char *s = srv_metrics_render(&d->metrics);
-    if (!s)
-      return send_problem(c, r, 500, "internal", "out of memory", NULL, 0,
-                          NULL);
-    return send_body(c, r, 200, s, strlen(s),
-                     "text/plain; version=0.0.4; charset=utf-8", 1, 0, NULL, 0);
-  }
-  }
-  return send_problem(c, r, 404, "not-found", "no such resource", NULL, 0,
-                      NULL);
+/* One request to the api, with what the daemon knows of itself. */
+static void handle(struct srv_daemon *d, req *r, api_response *ar) {
+  api_server_info info = {now() - d->started,
+                          srv_metrics_in_flight(d->metrics, 0), d->transport,
+                          metrics_text, d};
+  api_handle(r->ep, r->buf ? r->buf : "", r->len, &d->cfg.lim, &info, ar);
+  if (ar->status >= 500 && ar->status != 503)
+    fprintf(stderr, "stickslipd: %s %s answered %d: %.200s\n", r->method,
+            r->path, ar->status, ar->body ? ar->body : "");
 }
 
 static int is_json_type(const char *ct) {
@@ -204,30 +157,102 @@ static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
   while ((got = sem_timedwait(&d->slots, &dl)) != 0 && errno == EINTR)
     ;
   if (got != 0) {
-    atomic_fetch_add(&d->metrics.rejected_busy, 1);
-    return send_problem(c, r, 503, "overloaded",
+    srv_metrics_busy(d->metrics);
+    return send_problem(c, r, API_P_OVERLOADED,
                         "every compute slot stayed busy; retry after a second",
                         NULL, 0, NULL);
   }
-  api_endpoint ep = r->ep == SRV_EP_ORBIT      ? API_ORBIT
-                    : r->ep == SRV_EP_SIMULATE ? API_SIMULATE
-                                               : API_STABILITY;
-  api_handle(ep, r->buf ? r->buf : "", r->len, &d->cfg.lim, &ar);
+  handle(d, r, &ar);
   sem_post(&d->slots);
-  if (ar.status >= 500)
-    fprintf(stderr, "stickslipd: %s %s answered %d: %.200s\n", r->method,
-            r->path, ar.status, ar.body ? ar.body : "");
-  return send_api(c, r, &ar, 0, NULL, 0);
+  return send_api(c, r, &ar, NULL);
+}
+
+/* 413: the body is over the limit (from Content-Length, or as it came). */
+static enum MHD_Result too_large(struct srv_daemon *d, struct MHD_Connection *c,
+                                 req *r) {
+  char detail[128];
+  snprintf(detail, sizeof detail, "the body is over the limit of %zu bytes",
+           d->cfg.lim.max_body);
+  return send_problem(c, r, API_P_BODY_TOO_LARGE, detail, "max_body",
+                      (double)d->cfg.lim.max_body, NULL);
 }
 
 /* Decide an error answer now, send it on the next call. */
-static enum MHD_Result defer(req *r, int status, const char *type,
-                             const char *detail, const char *allow) {
-  r->p_status = status;
-  r->p_type = type;
+static enum MHD_Result defer(req *r, api_problem_kind kind, const char *detail,
+                             const char *allow) {
+  r->p_status = api_problem_status(kind);
+  r->p_kind = kind;
   r->p_allow = allow;
   if (detail)
     snprintf(r->p_detail, sizeof r->p_detail, "%s", detail);
+  return MHD_YES;
+}
+
+/* The first call of a request: its headers are in.  Route it, and refuse
+ * now what can be refused from the headers alone. */
+static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
+                             req *r, const char *url, const char *method) {
+  size_t ep;
+  r->t0 = now();
+  r->ep = api_endpoint_count();
+  snprintf(r->method, sizeof r->method, "%s", method);
+  snprintf(r->path, sizeof r->path, "%s", url);
+  srv_metrics_in_flight(d->metrics, +1);
+  if (atomic_load(&d->draining))
+    return defer(r, API_P_SHUTTING_DOWN, "the server is shutting down", NULL);
+  int route = api_route(method, url, &ep);
+  if (route == 404)
+    return defer(r, API_P_NOT_FOUND, "no such resource; see /openapi.json",
+                 NULL);
+  const api_endpoint *row = api_endpoint_at(ep);
+  r->ep = ep;
+  if (route == 405) {
+    snprintf(r->p_detail, sizeof r->p_detail, "%s takes %s", row->path,
+             row->method);
+    return defer(r, API_P_METHOD_NOT_ALLOWED, NULL, row->method);
+  }
+  if (row->run_class == API_RUN_INLINE)
+    return MHD_YES; /* answered on the next call */
+  r->is_post = 1;
+  const char *ct =
+      MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Type");
+  if (!is_json_type(ct))
+    return defer(r, API_P_MEDIA_TYPE,
+                 "send the body as Content-Type: application/json", NULL);
+  const char *cl =
+      MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Length");
+  if (cl) {
+    char *end;
+    errno = 0;
+    unsigned long long n = strtoull(cl, &end, 10);
+    if (errno == ERANGE || n > d->cfg.lim.max_body)
+      return too_large(d, c, r);
+  }
+  return MHD_YES;
+}
+
+/* A piece of the body: kept while it fits the limit, counted over it. */
+static enum MHD_Result take_body(struct srv_daemon *d, req *r, const char *data,
+                                 size_t n) {
+  if (now() - r->t0 > BODY_SECONDS)
+    return MHD_NO;
+  if (r->too_big || r->len + n > d->cfg.lim.max_body) {
+    r->too_big = 1;
+    return MHD_YES;
+  }
+  if (r->len + n + 1 > r->cap) {
+    size_t cap = r->cap ? r->cap : 4096;
+    while (cap < r->len + n + 1)
+      cap *= 2;
+    char *b = realloc(r->buf, cap);
+    if (!b)
+      return MHD_NO;
+    r->buf = b;
+    r->cap = cap;
+  }
+  memcpy(r->buf + r->len, data, n);
+  r->len += n;
+  r->buf[r->len] = 0;
   return MHD_YES;
 }
 
@@ -239,59 +264,10 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
   req *r = *con_cls;
   (void)version;
   if (!r) {
-    r = calloc(1, sizeof *r);
-    if (!r)
+    if (!(r = calloc(1, sizeof *r)))
       return MHD_NO;
     *con_cls = r;
-    r->t0 = now();
-    r->ep = SRV_EP_OTHER;
-    snprintf(r->method, sizeof r->method, "%s", method);
-    snprintf(r->path, sizeof r->path, "%s", url);
-    atomic_fetch_add(&d->metrics.in_flight, 1);
-    if (atomic_load(&d->draining))
-      return defer(r, 503, "shutting-down", "the server is shutting down",
-                   NULL);
-    const route *rt = NULL;
-    for (size_t i = 0; i < sizeof ROUTES / sizeof ROUTES[0]; i++)
-      if (strcmp(url, ROUTES[i].path) == 0) {
-        r->ep = ROUTES[i].ep;
-        if (strcmp(method, ROUTES[i].method) == 0 ||
-            (strcmp(method, "HEAD") == 0 &&
-             strcmp(ROUTES[i].method, "GET") == 0)) {
-          rt = &ROUTES[i];
-          break;
-        }
-        snprintf(r->p_detail, sizeof r->p_detail, "%s takes %s", ROUTES[i].path,
-                 ROUTES[i].method);
-        return defer(r, 405, "method-not-allowed", NULL, ROUTES[i].method);
-      }
-    if (!rt)
-      return defer(r, 404, "not-found", "no such resource; see /openapi.json",
-                   NULL);
-    if (strcmp(rt->method, "GET") == 0)
-      return MHD_YES; /* answered on the next call */
-    r->is_post = 1;
-    const char *ct =
-        MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Type");
-    if (!is_json_type(ct))
-      return defer(r, 415, "unsupported-media-type",
-                   "send the body as Content-Type: application/json", NULL);
-    const char *cl =
-        MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Length");
-    if (cl) {
-      char *end;
-      errno = 0;
-      unsigned long long n = strtoull(cl, &end, 10);
-      if (errno == ERANGE || n > d->cfg.lim.max_body) {
-        char detail[128];
-        snprintf(detail, sizeof detail,
-                 "the body is over the limit of %zu bytes",
-                 d->cfg.lim.max_body);
-        return send_problem(c, r, 413, "limit-exceeded", detail, "max_body",
-                            (double)d->cfg.lim.max_body, NULL);
-      }
-    }
-    return MHD_YES;
+    return admit(d, c, r, url, method);
   }
   if (r->done || r->p_status) {
     /* an answer is decided: discard whatever body still comes */
@@ -299,41 +275,19 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
       *upload_data_size = 0;
       return MHD_YES;
     }
-    return send_problem(c, r, r->p_status, r->p_type, r->p_detail, NULL, 0,
-                        r->p_allow);
+    return send_problem(c, r, r->p_kind, r->p_detail, NULL, 0, r->p_allow);
   }
-  if (!r->is_post)
-    return serve_get(d, c, r);
   if (*upload_data_size) {
     size_t n = *upload_data_size;
     *upload_data_size = 0;
-    if (now() - r->t0 > BODY_SECONDS)
-      return MHD_NO;
-    if (r->too_big || r->len + n > d->cfg.lim.max_body) {
-      r->too_big = 1;
-      return MHD_YES;
-    }
-    if (r->len + n + 1 > r->cap) {
-      size_t cap = r->cap ? r->cap : 4096;
-      while (cap < r->len + n + 1)
-        cap *= 2;
-      char *b = realloc(r->buf, cap);
-      if (!b)
-        return MHD_NO;
-      r->buf = b;
-      r->cap = cap;
-    }
-    memcpy(r->buf + r->len, upload_data, n);
-    r->len += n;
-    r->buf[r->len] = 0;
-    return MHD_YES;
+    return take_body(d, r, upload_data, n);
   }
-  if (r->too_big) {
-    char detail[128];
-    snprintf(detail, sizeof detail, "the body is over the limit of %zu bytes",
-             d->cfg.lim.max_body);
-    return send_problem(c, r, 413, "limit-exceeded", detail, "max_body",
-                        (double)d->cfg.lim.max_body, NULL);
+  if (r->too_big)
+    return too_large(d, c, r);
+  if (!r->is_post) {
+    api_response ar;
+    handle(d, r, &ar);
+    return send_api(c, r, &ar, NULL);
   }
   return compute(d, c, r);
 }
@@ -348,8 +302,8 @@ static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
   double dt = now() - r->t0;
   int status = r->done ? r->status : 499; /* 499: client went away */
   (void)toe;
-  srv_metrics_observe(&d->metrics, r->ep, status, dt);
-  atomic_fetch_sub(&d->metrics.in_flight, 1);
+  srv_metrics_observe(d->metrics, r->ep, status, dt);
+  srv_metrics_in_flight(d->metrics, -1);
   if (!d->cfg.quiet)
     fprintf(stderr, "%s %s %d %ld\n", r->method, r->path, status,
             (long)(dt * 1e6));
@@ -358,37 +312,63 @@ static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
   *con_cls = NULL;
 }
 
+/* The listening address of --bind and --port; 0, or -1 when --bind is not
+ * an IPv4 or IPv6 address. */
+static int listen_address(const srv_config *cfg, struct sockaddr_storage *ss,
+                          unsigned *flags) {
+  memset(ss, 0, sizeof *ss);
+  if (strchr(cfg->bind, ':')) {
+    struct sockaddr_in6 *a = (struct sockaddr_in6 *)ss;
+    a->sin6_family = AF_INET6;
+    a->sin6_port = htons((uint16_t)cfg->port);
+    *flags |= MHD_USE_IPv6;
+    return inet_pton(AF_INET6, cfg->bind, &a->sin6_addr) == 1 ? 0 : -1;
+  }
+  struct sockaddr_in *a = (struct sockaddr_in *)ss;
+  a->sin_family = AF_INET;
+  a->sin_port = htons((uint16_t)cfg->port);
+  return inet_pton(AF_INET, cfg->bind, &a->sin_addr) == 1 ? 0 : -1;
+}
+
+/* The port the daemon listens on (the one the system chose for --port 0). */
+static int bound_port(struct MHD_Daemon *mhd, int asked) {
+  const union MHD_DaemonInfo *info =
+      MHD_get_daemon_info(mhd, MHD_DAEMON_INFO_LISTEN_FD);
+  struct sockaddr_storage got;
+  socklen_t gl = sizeof got;
+  if (!info || getsockname(info->listen_fd, (struct sockaddr *)&got, &gl))
+    return asked;
+  return got.ss_family == AF_INET6
+             ? ntohs(((struct sockaddr_in6 *)&got)->sin6_port)
+             : ntohs(((struct sockaddr_in *)&got)->sin_port);
+}
+
+static void daemon_free(struct srv_daemon *d) {
+  srv_metrics_free(d->metrics);
+  free(d);
+}
+
 struct srv_daemon *srv_start(const srv_config *cfg) {
   struct srv_daemon *d = calloc(1, sizeof *d);
   struct sockaddr_storage ss;
-  socklen_t sl;
   unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD |
                    MHD_USE_THREAD_PER_CONNECTION | MHD_USE_AUTO | MHD_USE_ITC |
                    MHD_USE_ERROR_LOG;
-  if (!d)
+  if (!d || !(d->metrics = srv_metrics_new())) {
+    free(d);
     return NULL;
+  }
   d->cfg = *cfg;
   d->started = now();
-  memset(&ss, 0, sizeof ss);
-  if (strchr(cfg->bind, ':')) {
-    struct sockaddr_in6 *a = (struct sockaddr_in6 *)&ss;
-    a->sin6_family = AF_INET6;
-    a->sin6_port = htons((uint16_t)cfg->port);
-    if (inet_pton(AF_INET6, cfg->bind, &a->sin6_addr) != 1)
-      goto bad_addr;
-    flags |= MHD_USE_IPv6;
-    sl = sizeof *a;
-  } else {
-    struct sockaddr_in *a = (struct sockaddr_in *)&ss;
-    a->sin_family = AF_INET;
-    a->sin_port = htons((uint16_t)cfg->port);
-    if (inet_pton(AF_INET, cfg->bind, &a->sin_addr) != 1)
-      goto bad_addr;
-    sl = sizeof *a;
+  snprintf(d->transport, sizeof d->transport, "%s", MHD_get_version());
+  if (listen_address(cfg, &ss, &flags)) {
+    fprintf(stderr, "stickslipd: --bind %s is not an IPv4 or IPv6 address\n",
+            cfg->bind);
+    daemon_free(d);
+    return NULL;
   }
-  (void)sl;
   if (sem_init(&d->slots, 0, cfg->workers) != 0) {
-    free(d);
+    daemon_free(d);
     return NULL;
   }
   d->mhd = MHD_start_daemon(
@@ -403,20 +383,10 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     fprintf(stderr, "stickslipd: cannot listen on %s port %d: %s\n", cfg->bind,
             cfg->port, strerror(errno));
     sem_destroy(&d->slots);
-    free(d);
+    daemon_free(d);
     return NULL;
   }
-  const union MHD_DaemonInfo *info =
-      MHD_get_daemon_info(d->mhd, MHD_DAEMON_INFO_LISTEN_FD);
-  int port = cfg->port;
-  if (info) {
-    struct sockaddr_storage got;
-    socklen_t gl = sizeof got;
-    if (getsockname(info->listen_fd, (struct sockaddr *)&got, &gl) == 0)
-      port = got.ss_family == AF_INET6
-                 ? ntohs(((struct sockaddr_in6 *)&got)->sin6_port)
-                 : ntohs(((struct sockaddr_in *)&got)->sin_port);
-  }
+  int port = bound_port(d->mhd, cfg->port);
   if (strchr(cfg->bind, ':'))
     fprintf(stderr, "stickslipd listening on http://[%s]:%d\n", cfg->bind,
             port);
@@ -424,11 +394,6 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     fprintf(stderr, "stickslipd listening on http://%s:%d\n", cfg->bind, port);
   fflush(stderr);
   return d;
-bad_addr:
-  fprintf(stderr, "stickslipd: --bind %s is not an IPv4 or IPv6 address\n",
-          cfg->bind);
-  free(d);
-  return NULL;
 }
 
 void srv_stop(struct srv_daemon *d) {
@@ -437,7 +402,7 @@ void srv_stop(struct srv_daemon *d) {
   atomic_store(&d->draining, 1);
   MHD_socket fd = MHD_quiesce_daemon(d->mhd);
   double until = now() + d->cfg.drain;
-  while (atomic_load(&d->metrics.in_flight) > 0 && now() < until) {
+  while (srv_metrics_in_flight(d->metrics, 0) > 0 && now() < until) {
     struct timespec ts = {0, 10 * 1000 * 1000};
     nanosleep(&ts, NULL);
   }
@@ -445,5 +410,5 @@ void srv_stop(struct srv_daemon *d) {
   if (fd != MHD_INVALID_SOCKET)
     close(fd);
   sem_destroy(&d->slots);
-  free(d);
+  daemon_free(d);
 }

@@ -14,9 +14,85 @@
 #include "server.h"
 #include "stickslip.h"
 
-static void usage(FILE *f) {
-  api_limits l;
-  api_limits_default(&l);
+/* The numeric flags: each sets one field of srv_config, within a range. */
+typedef enum flag_type { F_SIZE, F_INT, F_UNSIGNED, F_DOUBLE } flag_type;
+
+typedef struct flag {
+  const char *name;
+  flag_type type;
+  double lo, hi;
+  size_t off;
+  const char *help;
+} flag;
+
+#define CFG(m) offsetof(srv_config, m)
+static const flag FLAGS[] = {
+    {"--port", F_INT, 0, 65535, CFG(port),
+     "port (STICKSLIP_PORT; 0 picks a free port)"},
+    {"--max-body", F_SIZE, 64, 1 << 30, CFG(lim.max_body),
+     "request body limit, bytes"},
+    {"--max-samples", F_SIZE, 1, 1e8, CFG(lim.max_samples),
+     "samples in one response"},
+    {"--max-events", F_SIZE, 1, 1e9, CFG(lim.max_events),
+     "events computed by one /simulate"},
+    {"--max-event-list", F_SIZE, 1, 1e8, CFG(lim.max_event_list),
+     "events listed in one response"},
+    {"--max-horizon", F_DOUBLE, 1e-9, 1e15, CFG(lim.max_horizon),
+     "t_end - t0, dimensionless"},
+    {"--max-seconds", F_DOUBLE, 1e-3, 3600, CFG(lim.max_seconds),
+     "compute time of one request, seconds"},
+    {"--max-orbits", F_INT, 1, 1024, CFG(lim.max_orbits),
+     "orbits in one /orbit response"},
+    {"--max-depth", F_INT, 2, 2048, CFG(lim.max_depth), "JSON nesting depth"},
+    {"--workers", F_UNSIGNED, 1, 1024, CFG(workers),
+     "computations at once (default: the number of cores)"},
+    {"--queue-timeout", F_DOUBLE, 0, 600, CFG(queue_timeout),
+     "wait for a compute slot before 503, seconds"},
+    {"--max-connections", F_UNSIGNED, 1, 65536, CFG(max_conn),
+     "open connections"},
+    {"--per-ip-connections", F_UNSIGNED, 1, 65536, CFG(per_ip),
+     "open connections per client address"},
+    {"--connection-timeout", F_UNSIGNED, 1, 3600, CFG(timeout),
+     "idle connection timeout, seconds"},
+    {"--drain", F_DOUBLE, 0, 3600, CFG(drain),
+     "grace for requests in flight on SIGTERM/SIGINT, seconds"},
+};
+#define N_FLAGS (sizeof FLAGS / sizeof FLAGS[0])
+
+static double get_value(const srv_config *cfg, const flag *f) {
+  const char *p = (const char *)cfg + f->off;
+  switch (f->type) {
+  case F_SIZE:
+    return (double)*(const size_t *)p;
+  case F_INT:
+    return *(const int *)p;
+  case F_UNSIGNED:
+    return *(const unsigned *)p;
+  case F_DOUBLE:
+    return *(const double *)p;
+  }
+  return 0;
+}
+
+static void set_value(srv_config *cfg, const flag *f, double v) {
+  char *p = (char *)cfg + f->off;
+  switch (f->type) {
+  case F_SIZE:
+    *(size_t *)p = (size_t)v;
+    break;
+  case F_INT:
+    *(int *)p = (int)v;
+    break;
+  case F_UNSIGNED:
+    *(unsigned *)p = (unsigned)v;
+    break;
+  case F_DOUBLE:
+    *(double *)p = v;
+    break;
+  }
+}
+
+static void usage(FILE *f, const srv_config *defaults) {
   fprintf(f,
           "usage: stickslipd [options]\n"
           "\n"
@@ -25,169 +101,98 @@ static void usage(FILE *f) {
           "/metrics.  Prints the URL it listens on to stderr when ready.\n"
           "\n"
           "  --bind ADDR               address to listen on (STICKSLIP_BIND;\n"
-          "                            default 127.0.0.1; IPv6 allowed)\n"
-          "  --port N                  port (STICKSLIP_PORT; default 8080;\n"
-          "                            0 picks a free port)\n"
-          "  --max-body BYTES          request body limit (%zu)\n"
-          "  --max-samples N           samples in one response (%zu)\n"
-          "  --max-events N            events computed by one /simulate (%zu)\n"
-          "  --max-event-list N        events listed in one response (%zu)\n"
-          "  --max-horizon T           t_end - t0, dimensionless (%g)\n"
-          "  --max-seconds S           compute time of one request (%g)\n"
-          "  --max-orbits N            orbits in one /orbit response (%d)\n"
-          "  --max-depth N             JSON nesting depth (%d)\n"
-          "  --workers N               computations at once (number of cores)\n"
-          "  --queue-timeout S         wait for a compute slot before 503 (2)\n"
-          "  --max-connections N       open connections (256)\n"
-          "  --per-ip-connections N    open connections per client (64)\n"
-          "  --connection-timeout S    idle connection timeout (10)\n"
-          "  --drain S                 grace for requests in flight on\n"
-          "                            SIGTERM/SIGINT (8)\n"
-          "  --quiet                   no access log\n"
-          "  --version                 print the version and exit\n"
-          "  --help                    this text\n",
-          l.max_body, l.max_samples, l.max_events, l.max_event_list,
-          l.max_horizon, l.max_seconds, l.max_orbits, l.max_depth);
+          "                            default 127.0.0.1; IPv6 allowed)\n");
+  for (size_t i = 0; i < N_FLAGS; i++)
+    fprintf(f, "  %-25s %s (%g)\n", FLAGS[i].name, FLAGS[i].help,
+            get_value(defaults, &FLAGS[i]));
+  fprintf(f, "  --quiet                   no access log\n"
+             "  --version                 print the version and exit\n"
+             "  --help                    this text\n");
 }
 
-static int parse_ull(const char *flag, const char *s, unsigned long long lo,
-                     unsigned long long hi, unsigned long long *out) {
+/* The value of flag @a f from the text @a s: a number within its range,
+ * whole unless the flag takes a real. */
+static int parse(const flag *f, const char *s, double *out) {
   char *end;
   errno = 0;
-  if (!s || !*s || *s == '-')
-    goto bad;
-  *out = strtoull(s, &end, 10);
-  if (errno || *end || *out < lo || *out > hi)
-    goto bad;
-  return 0;
-bad:
-  fprintf(stderr, "stickslipd: %s needs a whole number in [%llu, %llu]\n", flag,
-          lo, hi);
+  if (s && *s && !(f->type != F_DOUBLE && *s == '-')) {
+    *out =
+        f->type == F_DOUBLE ? strtod(s, &end) : (double)strtoull(s, &end, 10);
+    if (!errno && !*end && *out >= f->lo && *out <= f->hi)
+      return 0;
+  }
+  fprintf(stderr, "stickslipd: %s needs %s in [%g, %g]\n", f->name,
+          f->type == F_DOUBLE ? "a number" : "a whole number", f->lo, f->hi);
   return -1;
 }
 
-static int parse_dbl(const char *flag, const char *s, double lo, double hi,
-                     double *out) {
-  char *end;
-  errno = 0;
-  if (!s || !*s)
-    goto bad;
-  *out = strtod(s, &end);
-  if (errno || *end || !(*out >= lo && *out <= hi))
-    goto bad;
-  return 0;
-bad:
-  fprintf(stderr, "stickslipd: %s needs a number in [%g, %g]\n", flag, lo, hi);
-  return -1;
-}
-
-int main(int argc, char **argv) {
-  srv_config cfg;
-  unsigned long long u;
-  const char *env;
-  memset(&cfg, 0, sizeof cfg);
-  snprintf(cfg.bind, sizeof cfg.bind, "127.0.0.1");
-  cfg.port = 8080;
-  api_limits_default(&cfg.lim);
-  cfg.max_conn = 256;
-  cfg.per_ip = 64;
-  cfg.timeout = 10;
+static void defaults(srv_config *cfg) {
+  memset(cfg, 0, sizeof *cfg);
+  snprintf(cfg->bind, sizeof cfg->bind, "127.0.0.1");
+  cfg->port = 8080;
+  api_limits_default(&cfg->lim);
+  cfg->max_conn = 256;
+  cfg->per_ip = 64;
+  cfg->timeout = 10;
   long nc = sysconf(_SC_NPROCESSORS_ONLN);
-  cfg.workers = nc > 0 ? (unsigned)nc : 1;
-  cfg.queue_timeout = 2;
-  cfg.drain = 8;
+  cfg->workers = nc > 0 ? (unsigned)nc : 1;
+  cfg->queue_timeout = 2;
+  cfg->drain = 8;
+}
+
+/* The environment, then the flags.  Returns -1 to exit 0 (--help,
+ * --version), 2 on a bad flag, 0 to run. */
+static int configure(srv_config *cfg, int argc, char **argv) {
+  const char *env;
+  double x;
   if ((env = getenv("STICKSLIP_BIND")) && *env)
-    snprintf(cfg.bind, sizeof cfg.bind, "%s", env);
+    snprintf(cfg->bind, sizeof cfg->bind, "%s", env);
   if ((env = getenv("STICKSLIP_PORT")) && *env) {
-    if (parse_ull("STICKSLIP_PORT", env, 0, 65535, &u))
+    if (parse(&FLAGS[0], env, &x))
       return 2;
-    cfg.port = (int)u;
+    cfg->port = (int)x;
   }
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-    double x;
-    int used = 1;
-    if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-      usage(stdout);
-      return 0;
+    const flag *f = NULL;
+    for (size_t k = 0; k < N_FLAGS && !f; k++)
+      if (!strcmp(a, FLAGS[k].name))
+        f = &FLAGS[k];
+    if (f) {
+      if (parse(f, v, &x))
+        return 2;
+      set_value(cfg, f, x);
+      i++;
+    } else if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+      srv_config d;
+      defaults(&d);
+      usage(stdout, &d);
+      return -1;
     } else if (!strcmp(a, "--version")) {
       printf("stickslipd %s\n", SS_VERSION);
-      return 0;
+      return -1;
     } else if (!strcmp(a, "--quiet")) {
-      cfg.quiet = 1;
-      used = 0;
+      cfg->quiet = 1;
+    } else if (!strcmp(a, "--bind") && v && strlen(v) < sizeof cfg->bind) {
+      snprintf(cfg->bind, sizeof cfg->bind, "%s", v);
+      i++;
     } else if (!strcmp(a, "--bind")) {
-      if (!v || strlen(v) >= sizeof cfg.bind) {
-        fprintf(stderr, "stickslipd: --bind needs an address\n");
-        return 2;
-      }
-      snprintf(cfg.bind, sizeof cfg.bind, "%s", v);
-    } else if (!strcmp(a, "--port")) {
-      if (parse_ull(a, v, 0, 65535, &u))
-        return 2;
-      cfg.port = (int)u;
-    } else if (!strcmp(a, "--max-body")) {
-      if (parse_ull(a, v, 64, 1ULL << 30, &u))
-        return 2;
-      cfg.lim.max_body = (size_t)u;
-    } else if (!strcmp(a, "--max-samples")) {
-      if (parse_ull(a, v, 1, 100000000ULL, &u))
-        return 2;
-      cfg.lim.max_samples = (size_t)u;
-    } else if (!strcmp(a, "--max-events")) {
-      if (parse_ull(a, v, 1, 1000000000ULL, &u))
-        return 2;
-      cfg.lim.max_events = (size_t)u;
-    } else if (!strcmp(a, "--max-event-list")) {
-      if (parse_ull(a, v, 1, 100000000ULL, &u))
-        return 2;
-      cfg.lim.max_event_list = (size_t)u;
-    } else if (!strcmp(a, "--max-horizon")) {
-      if (parse_dbl(a, v, 1e-9, 1e15, &x))
-        return 2;
-      cfg.lim.max_horizon = x;
-    } else if (!strcmp(a, "--max-seconds")) {
-      if (parse_dbl(a, v, 1e-3, 3600, &x))
-        return 2;
-      cfg.lim.max_seconds = x;
-    } else if (!strcmp(a, "--max-orbits")) {
-      if (parse_ull(a, v, 1, 1024, &u))
-        return 2;
-      cfg.lim.max_orbits = (int)u;
-    } else if (!strcmp(a, "--max-depth")) {
-      if (parse_ull(a, v, 2, 2048, &u))
-        return 2;
-      cfg.lim.max_depth = (int)u;
-    } else if (!strcmp(a, "--workers")) {
-      if (parse_ull(a, v, 1, 1024, &u))
-        return 2;
-      cfg.workers = (unsigned)u;
-    } else if (!strcmp(a, "--queue-timeout")) {
-      if (parse_dbl(a, v, 0, 600, &x))
-        return 2;
-      cfg.queue_timeout = x;
-    } else if (!strcmp(a, "--max-connections")) {
-      if (parse_ull(a, v, 1, 65536, &u))
-        return 2;
-      cfg.max_conn = (unsigned)u;
-    } else if (!strcmp(a, "--per-ip-connections")) {
-      if (parse_ull(a, v, 1, 65536, &u))
-        return 2;
-      cfg.per_ip = (unsigned)u;
-    } else if (!strcmp(a, "--connection-timeout")) {
-      if (parse_ull(a, v, 1, 3600, &u))
-        return 2;
-      cfg.timeout = (unsigned)u;
-    } else if (!strcmp(a, "--drain")) {
-      if (parse_dbl(a, v, 0, 3600, &x))
-        return 2;
-      cfg.drain = x;
+      fprintf(stderr, "stickslipd: --bind needs an address\n");
+      return 2;
     } else {
       fprintf(stderr, "stickslipd: unknown option %s (see --help)\n", a);
       return 2;
     }
-    i += used;
   }
+  return 0;
+}
+
+int main(int argc, char **argv) {
+  srv_config cfg;
+  defaults(&cfg);
+  int rc = configure(&cfg, argc, argv);
+  if (rc)
+    return rc < 0 ? 0 : rc;
   /* Before any thread exists: GSL must not abort, jansson's hash seed is
    * set once, and every thread inherits a mask that blocks the signals the
    * main thread waits for. */

@@ -1,33 +1,76 @@
 /*
  * metrics.c: counters and latency histograms in the Prometheus text format.
+ * The endpoint labels are the api's endpoint table.
  */
+#include <stdarg.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "server.h"
 
-const char *const srv_ep_names[SRV_EP_COUNT] = {
-    "orbit",   "simulate", "stability", "health",
-    "version", "openapi",  "metrics",   "other"};
+static const double BOUNDS[SRV_BUCKETS] = {0.0001, 0.00025, 0.0005, 0.001,
+                                           0.0025, 0.005,   0.01,   0.025,
+                                           0.05,   0.1,     1.0,    10.0};
 
-const double srv_bucket_bounds[SRV_BUCKETS] = {0.0001, 0.00025, 0.0005, 0.001,
-                                               0.0025, 0.005,   0.01,   0.025,
-                                               0.05,   0.1,     1.0,    10.0};
+typedef struct ep_metrics {
+  atomic_ulong status_class[6]; /* 1xx..5xx by index 1..5 */
+  atomic_ulong latency_us_sum;
+  atomic_ulong latency_bucket[SRV_BUCKETS + 1];
+} ep_metrics;
 
-void srv_metrics_observe(srv_metrics *m, int ep, int status, double seconds) {
+struct srv_metrics {
+  size_t n; /* endpoints + "other" */
+  ep_metrics *ep;
+  atomic_long in_flight;
+  atomic_ulong rejected_busy;
+};
+
+srv_metrics *srv_metrics_new(void) {
+  srv_metrics *m = calloc(1, sizeof *m);
+  if (!m)
+    return NULL;
+  m->n = api_endpoint_count() + 1;
+  if (!(m->ep = calloc(m->n, sizeof *m->ep))) {
+    free(m);
+    return NULL;
+  }
+  return m;
+}
+
+void srv_metrics_free(srv_metrics *m) {
+  if (m)
+    free(m->ep);
+  free(m);
+}
+
+static const char *label(const srv_metrics *m, size_t i) {
+  return i + 1 < m->n ? api_endpoint_at(i)->label : "other";
+}
+
+void srv_metrics_observe(srv_metrics *m, size_t ep, int status,
+                         double seconds) {
   int cls = status / 100;
-  if (ep < 0 || ep >= SRV_EP_COUNT)
-    ep = SRV_EP_OTHER;
+  if (ep >= m->n - 1)
+    ep = m->n - 1;
   if (cls < 1 || cls > 5)
     cls = 5;
-  atomic_fetch_add(&m->requests[ep], 1);
-  atomic_fetch_add(&m->status_class[ep][cls], 1);
-  atomic_fetch_add(&m->latency_us_sum[ep], (unsigned long)(seconds * 1e6));
+  ep_metrics *e = &m->ep[ep];
+  atomic_fetch_add(&e->status_class[cls], 1);
+  atomic_fetch_add(&e->latency_us_sum, (unsigned long)(seconds * 1e6));
   int b = 0;
-  while (b < SRV_BUCKETS && seconds > srv_bucket_bounds[b])
+  while (b < SRV_BUCKETS && seconds > BOUNDS[b])
     b++;
-  atomic_fetch_add(&m->latency_bucket[ep][b], 1);
+  atomic_fetch_add(&e->latency_bucket[b], 1);
+}
+
+void srv_metrics_busy(srv_metrics *m) {
+  atomic_fetch_add(&m->rejected_busy, 1);
+}
+
+long srv_metrics_in_flight(srv_metrics *m, int delta) {
+  return atomic_fetch_add(&m->in_flight, delta) + delta;
 }
 
 typedef struct sbuf {
@@ -41,7 +84,6 @@ static void put(sbuf *s, const char *fmt, ...)
 #endif
     ;
 
-#include <stdarg.h>
 static void put(sbuf *s, const char *fmt, ...) {
   va_list ap;
   if (!s->p)
@@ -67,42 +109,45 @@ static void put(sbuf *s, const char *fmt, ...) {
   }
 }
 
-char *srv_metrics_render(const srv_metrics *m) {
+static void histogram(sbuf *s, const char *name, ep_metrics *e) {
+  unsigned long cum = 0;
+  for (int b = 0; b < SRV_BUCKETS; b++) {
+    cum += atomic_load(&e->latency_bucket[b]);
+    put(s,
+        "stickslip_request_duration_seconds_bucket{endpoint=\"%s\",le=\"%g\"}"
+        " %lu\n",
+        name, BOUNDS[b], cum);
+  }
+  cum += atomic_load(&e->latency_bucket[SRV_BUCKETS]);
+  put(s,
+      "stickslip_request_duration_seconds_bucket{endpoint=\"%s\",le=\"+Inf\"}"
+      " %lu\n",
+      name, cum);
+  put(s, "stickslip_request_duration_seconds_sum{endpoint=\"%s\"} %.6f\n", name,
+      1e-6 * (double)atomic_load(&e->latency_us_sum));
+  put(s, "stickslip_request_duration_seconds_count{endpoint=\"%s\"} %lu\n",
+      name, cum);
+}
+
+char *srv_metrics_render(srv_metrics *m) {
   sbuf s = {malloc(8192), 0, 8192};
   put(&s, "# HELP stickslip_requests_total Requests by endpoint and status "
           "class.\n# TYPE stickslip_requests_total counter\n");
-  for (int e = 0; e < SRV_EP_COUNT; e++)
+  for (size_t e = 0; e < m->n; e++)
     for (int c = 1; c <= 5; c++)
       put(&s, "stickslip_requests_total{endpoint=\"%s\",code=\"%dxx\"} %lu\n",
-          srv_ep_names[e], c, atomic_load(&m->status_class[e][c]));
+          label(m, e), c, atomic_load(&m->ep[e].status_class[c]));
   put(&s, "# HELP stickslip_errors_total Requests answered 4xx or 5xx.\n"
           "# TYPE stickslip_errors_total counter\n");
-  for (int e = 0; e < SRV_EP_COUNT; e++)
-    put(&s, "stickslip_errors_total{endpoint=\"%s\"} %lu\n", srv_ep_names[e],
-        atomic_load(&m->status_class[e][4]) +
-            atomic_load(&m->status_class[e][5]));
+  for (size_t e = 0; e < m->n; e++)
+    put(&s, "stickslip_errors_total{endpoint=\"%s\"} %lu\n", label(m, e),
+        atomic_load(&m->ep[e].status_class[4]) +
+            atomic_load(&m->ep[e].status_class[5]));
   put(&s, "# HELP stickslip_request_duration_seconds Latency from the first "
           "byte of the request to the last byte of the response.\n"
           "# TYPE stickslip_request_duration_seconds histogram\n");
-  for (int e = 0; e < SRV_EP_COUNT; e++) {
-    unsigned long cum = 0;
-    for (int b = 0; b < SRV_BUCKETS; b++) {
-      cum += atomic_load(&m->latency_bucket[e][b]);
-      put(&s,
-          "stickslip_request_duration_seconds_bucket{endpoint=\"%s\",le=\"%g\"}"
-          " %lu\n",
-          srv_ep_names[e], srv_bucket_bounds[b], cum);
-    }
-    cum += atomic_load(&m->latency_bucket[e][SRV_BUCKETS]);
-    put(&s,
-        "stickslip_request_duration_seconds_bucket{endpoint=\"%s\",le=\"+Inf\"}"
-        " %lu\n",
-        srv_ep_names[e], cum);
-    put(&s, "stickslip_request_duration_seconds_sum{endpoint=\"%s\"} %.6f\n",
-        srv_ep_names[e], 1e-6 * (double)atomic_load(&m->latency_us_sum[e]));
-    put(&s, "stickslip_request_duration_seconds_count{endpoint=\"%s\"} %lu\n",
-        srv_ep_names[e], cum);
-  }
+  for (size_t e = 0; e < m->n; e++)
+    histogram(&s, label(m, e), &m->ep[e]);
   put(&s,
       "# HELP stickslip_requests_in_flight Requests being served.\n"
       "# TYPE stickslip_requests_in_flight gauge\n"

@@ -23,35 +23,22 @@ typedef struct srv_config {
   int quiet;            /**< --quiet: no access log */
 } srv_config;
 
-/* Endpoints, for metrics. */
-enum {
-  SRV_EP_ORBIT,
-  SRV_EP_SIMULATE,
-  SRV_EP_STABILITY,
-  SRV_EP_HEALTH,
-  SRV_EP_VERSION,
-  SRV_EP_OPENAPI,
-  SRV_EP_METRICS,
-  SRV_EP_OTHER,
-  SRV_EP_COUNT
-};
-
 #define SRV_BUCKETS 12
 
-typedef struct srv_metrics {
-  atomic_ulong requests[SRV_EP_COUNT];
-  atomic_ulong status_class[SRV_EP_COUNT][6]; /* 1xx..5xx by index 1..5 */
-  atomic_ulong latency_us_sum[SRV_EP_COUNT];
-  atomic_ulong latency_bucket[SRV_EP_COUNT][SRV_BUCKETS + 1];
-  atomic_long in_flight;
-  atomic_ulong rejected_busy;
-} srv_metrics;
+/*
+ * Counters and latency histograms by endpoint: one row per row of the api's
+ * endpoint table (api_endpoint_at), and a last row for requests that matched
+ * none (404, 405).
+ */
+typedef struct srv_metrics srv_metrics;
 
-extern const char *const srv_ep_names[SRV_EP_COUNT];
-extern const double srv_bucket_bounds[SRV_BUCKETS];
-
-void srv_metrics_observe(srv_metrics *m, int ep, int status, double seconds);
-char *srv_metrics_render(const srv_metrics *m); /* malloc'd */
+srv_metrics *srv_metrics_new(void); /* NULL when out of memory */
+void srv_metrics_free(srv_metrics *m);
+/* @a ep: an endpoint index, or anything out of range for "other". */
+void srv_metrics_observe(srv_metrics *m, size_t ep, int status, double seconds);
+void srv_metrics_busy(srv_metrics *m); /* a 503 for a busy slot */
+long srv_metrics_in_flight(srv_metrics *m, int delta);
+char *srv_metrics_render(srv_metrics *m); /* malloc'd */
 
 /** Start the daemon; prints the URL to stderr when ready.  NULL on error. */
 struct srv_daemon;
