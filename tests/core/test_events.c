@@ -51,7 +51,8 @@ static void shifted_cos(ss_trig *g, int k, double amp, double w, double s) {
   g->b[k] = amp * sin(w * s);
 }
 
-/* EVIDENCE: issue 2.3 "a root immediately after t = 0" */
+/* EVIDENCE: README "How it works, and how it is checked" (certified event
+ * location): "a root immediately after t = 0" */
 static void test_immediate(void) {
   ss_trig g = {0};
   double t;
@@ -71,8 +72,8 @@ static void test_immediate(void) {
   ASSERT_NEAR(t, M_PI, 1e-14);
 }
 
-/* EVIDENCE: issue 2.3 "two roots closer together than any fixed sampling
- * step" */
+/* EVIDENCE: README "How it works, and how it is checked" (certified event
+ * location): "two roots closer together than any fixed sampling step" */
 static void test_close_roots(void) {
   for (double delta = 1e-4; delta >= 1e-12; delta *= 1e-2) {
     ss_trig g = {0};
@@ -92,7 +93,8 @@ static void test_close_roots(void) {
   }
 }
 
-/* EVIDENCE: issue 2.3 "a tangential (grazing) zero" */
+/* EVIDENCE: README "The model" (grazing) and "How it works": "a tangential
+ * (grazing) zero" */
 static void test_grazing(void) {
   ss_trig g = {0};
   double t;
@@ -121,8 +123,8 @@ static void test_grazing(void) {
   ASSERT_NEAR(t, oracle_root(&g, tm + 0.1, 30, 1e-4), 1e-12);
 }
 
-/* EVIDENCE: issue 2.3 "a near miss that comes within 1e-9 of zero without
- * touching" */
+/* EVIDENCE: README "The model" (grazing): "a near miss that comes within 1e-9
+ * of zero without touching" */
 static void test_near_miss(void) {
   ss_trig g = {0};
   double t;
@@ -159,7 +161,7 @@ static void test_near_miss(void) {
   }
 }
 
-/* EVIDENCE: issue 2.3 "no root at all" */
+/* EVIDENCE: README "How it works, and how it is checked": "no root at all" */
 static void test_no_root(void) {
   ss_trig g = {0};
   double t;

@@ -19,7 +19,7 @@ static ref_params refp(const ss_model *m) {
   return r;
 }
 
-/* EVIDENCE: issue 5.4 grazing: a slip whose velocity touches V
+/* EVIDENCE: README "Hard cases": grazing: a slip whose velocity touches V
  * tangentially, checked by rk8pd: integrating the slip from the start
  * reaches x2' = V with x2'' = 0 at the reported time. */
 static void test_slip_grazing_rk8pd(void) {
@@ -49,7 +49,8 @@ static void test_slip_grazing_rk8pd(void) {
   ss_sim_free(s);
 }
 
-/* EVIDENCE: issue 5.4 a stick whose force touches ur without crossing */
+/* EVIDENCE: README "Hard cases": a stick whose force touches ur without
+ * crossing */
 static void test_stick_grazing(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -111,7 +112,7 @@ static void slip_taylor(const ss_model *m, const double x[4], long double t,
   }
 }
 
-/* EVIDENCE: issue 5.4 a phase lasting about 1e-9 */
+/* EVIDENCE: README "Hard cases": a phase lasting about 1e-9 */
 static void test_short_phases(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -158,8 +159,8 @@ static void test_short_phases(void) {
   ss_sim_free(s);
 }
 
-/* EVIDENCE: issue 5.4 slip -> overshoot -> slip with no stick, against
- * rk8pd */
+/* EVIDENCE: README "Hard cases": slip -> overshoot -> slip with no stick,
+ * against rk8pd */
 static void test_slip_overshoot_slip(void) {
   ss_params p = {0.2, 4.0, 0.0724, 0.3, 1.0};
   ss_model m;
@@ -200,8 +201,8 @@ static void test_slip_overshoot_slip(void) {
   ASSERT_TRUE(found);
 }
 
-/* EVIDENCE: issue 5.4 parameters at the edges: each run agrees with the
- * rk8pd reference event by event, and the orbit search returns */
+/* EVIDENCE: README "Hard cases": parameters at the edges: each run agrees with
+ * the rk8pd reference event by event, and the orbit search returns */
 static void test_edges(void) {
   const struct {
     const char *what;
@@ -273,8 +274,9 @@ static void test_edges(void) {
   }
 }
 
-/* EVIDENCE: issue 5.4 10^6 events on the paper's stable orbit: the state at
- * every return to the stick -> slip point stays within 1e-12 of the orbit's */
+/* EVIDENCE: README "Hard cases": 10^6 events on the paper's stable orbit: the
+ * state at every return to the stick -> slip point stays within 1e-12 of the
+ * orbit's */
 static void test_no_drift(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -301,11 +303,11 @@ static void test_no_drift(void) {
          returns, drift, tdrift, ss_sim_time(s));
   ASSERT_EQ_INT(n, 1000000);
   ASSERT_TRUE(drift < 1e-12);
-  /* EVIDENCE: issue 2.4 event times keep their precision over long runs:
-   * the returns fall at k T to within the rounding of T itself (k up to
-   * 333333, T to ~1e-15 relative: ~3e-9).  A plain running sum of the
-   * phase durations would lose about ulp(3.4e6)/2 = 2.3e-10 per event, 1e-7
-   * or more after 10^6 events. */
+  /* EVIDENCE: README "How it works, and how it is checked" (simulation): event
+   * times keep their precision over long runs: the returns fall at k T to
+   * within the rounding of T itself (k up to 333333, T to ~1e-15 relative:
+   * ~3e-9).  A plain running sum of the phase durations would lose about
+   * ulp(3.4e6)/2 = 2.3e-10 per event, 1e-7 or more after 10^6 events. */
   ASSERT_TRUE(tdrift < 1e-8);
   ss_sim_free(s);
 }

@@ -22,7 +22,8 @@ static void test_params(void) {
   ss_diag d;
   ss_params p = PAPER;
   ASSERT_EQ_INT(ss_params_check(&p, NULL), SS_OK);
-  /* EVIDENCE: issue 2.1 the validator names the parameter and why */
+  /* EVIDENCE: stickslip.h ss_params_check: the validator names the parameter
+   * and why */
   struct {
     ss_params p;
     const char *where;
@@ -94,8 +95,9 @@ static void test_modal_data(void) {
 
 static const ref_opts TIGHT = {NULL, 1e-14, 1e-14, 0, 0};
 
-/* EVIDENCE: issue 2 "each mode's closed form against a GSL odeiv2 integration
- * (rk8pd, tight tolerance) of the physical equations (1.1) ... to 1e-10" */
+/* EVIDENCE: README "How it works, and how it is checked" (closed forms): "each
+ * mode's closed form against a GSL odeiv2 integration (rk8pd, tight tolerance)
+ * of the physical equations (1.1) ... to 1e-10" */
 static void test_flow_vs_odeiv2(void) {
   ref_opts o = TIGHT;
   o.type = gsl_odeiv2_step_rk8pd;
@@ -160,7 +162,8 @@ static void test_transition(void) {
   }
 }
 
-/* EVIDENCE: header, ss_mode_of_state rule */
+/* EVIDENCE: stickslip.h ss_mode_of_state and README "The model" (thresholds):
+ * the rule */
 static void test_mode_rule(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);

@@ -55,9 +55,10 @@ static void verify(const ss_model *m, const ss_orbit *o, const char *what) {
   ASSERT_TRUE(o->residual < 1e-12);
 }
 
-/* EVIDENCE: issue 3 "The paper's data set: the overshoot orbit is found with
- * no guess. Durations, z0 and eigenvalues agree with the paper to its
- * printed precision" */
+/* EVIDENCE: README "The paper's orbit, and where this differs from the printed
+ * values": "The paper's data set: the overshoot orbit is found with no guess.
+ * Durations, z0 and eigenvalues agree with the paper to its printed precision"
+ */
 static void test_paper(void) {
   ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
   ss_model m;
@@ -85,7 +86,8 @@ static void test_paper(void) {
   ASSERT_NEAR(ov->stab.eig_re[0], 0.1705, 0.002);
   ASSERT_NEAR(fabs(ov->stab.eig_im[0]), 0.0821, 0.012);
   ASSERT_TRUE(ov->stab.stable);
-  /* EVIDENCE: issue 5 "an orbit whose constraint margin is below 1e-3 (the
+  /* EVIDENCE: README "The paper's orbit, and where this differs from the
+   * printed values": "an orbit whose constraint margin is below 1e-3 (the
    * paper's own case is one)": (3.2) at the end of slip */
   ASSERT_TRUE(ov->switching.value > 0 && ov->switching.value < 1e-3);
   ASSERT_EQ_INT(ov->switching.phase, 0);
@@ -116,9 +118,9 @@ static void test_paper(void) {
   ASSERT_TRUE(st.jac_diff < 1e-6);
 }
 
-/* EVIDENCE: issue 3 "A parameter set where the overshoot equations have a
- * root that violates (3.2): no overshoot orbit is returned, and the reason
- * is" */
+/* EVIDENCE: README "How it works, and how it is checked" (feasibility): "A
+ * parameter set where the overshoot equations have a root that violates (3.2):
+ * no overshoot orbit is returned, and the reason is" */
 static void test_violates_32(void) {
   ss_params p = {0.2, 4.0, 0.0724, 0.4, 1.0};
   ss_model m;
@@ -143,9 +145,10 @@ static void test_violates_32(void) {
   ASSERT_TRUE(strstr(d.text, "(3.2)") != NULL);
 }
 
-/* EVIDENCE: issue 3 "Orbits for at least five other parameter sets,
- * including a classical stick-slip orbit, an unstable orbit and a period-2
- * orbit, each verified by simulation" */
+/* EVIDENCE: README "How it works, and how it is checked" (stability): "Orbits
+ * for at least five other parameter sets, including a classical stick-slip
+ * orbit, an unstable orbit and a period-2 orbit, each verified by simulation"
+ */
 static void test_other_sets(void) {
   const ss_params sets[] = {
       {0.2, 4.0, 0.0724, 0.4, 1.0}, {0.5, 1.0, 0.1, 0.5, 1.0},
@@ -224,9 +227,9 @@ static void test_sweep(void) {
   ASSERT_TRUE(total >= 320);
 }
 
-/* EVIDENCE: issue 3.1 the analytic Jacobian of the duration equations
- * against central differences, off the solution, for the overshoot
- * sequence and a five-phase one. */
+/* EVIDENCE: README "How it works, and how it is checked" (periodic orbits): the
+ * analytic Jacobian of the duration equations against central differences, off
+ * the solution, for the overshoot sequence and a five-phase one. */
 static void test_equation_jacobian(void) {
   ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
   ss_model m;

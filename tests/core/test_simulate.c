@@ -20,9 +20,10 @@ static ref_opts tight(void) {
   return o;
 }
 
-/* EVIDENCE: issue 2 "the paper's data set ... started from the stick -> slip
- * state printed in section 5: slip, overshoot and stick with durations close
- * to the paper's tau, tau1, tau2" */
+/* EVIDENCE: README "The paper's orbit, and where this differs from the printed
+ * values": "the paper's data set ... started from the stick -> slip state
+ * printed in section 5: slip, overshoot and stick with durations close to the
+ * paper's tau, tau1, tau2" */
 static void test_paper_run(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -134,9 +135,10 @@ static void test_battery(void) {
   ASSERT_TRUE(n_s2o > 0 && n_o2s > 0);
 }
 
-/* EVIDENCE: issue 2 "Scaling: multiplying V, us, ur and the initial state by
- * the same factor scales every state of the run and leaves every event time
- * unchanged, to 1e-12" */
+/* EVIDENCE: README "How it works, and how it is checked" (simulation):
+ * "Scaling: multiplying V, us, ur and the initial state by the same factor
+ * scales every state of the run and leaves every event time unchanged, to
+ * 1e-12" */
 static void test_scaling(void) {
   ss_model m1, m2;
   ss_model_init(&m1, &PAPER, NULL);
@@ -174,7 +176,8 @@ static void test_scaling(void) {
   }
 }
 
-/* EVIDENCE: issue 2.3 grazing in slip is reported, and the mass sticks */
+/* EVIDENCE: README "The model" (grazing): grazing in slip is reported, and the
+ * mass sticks */
 static void test_slip_grazing(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -205,8 +208,8 @@ static void test_slip_grazing(void) {
   ss_sim_result_free(&r);
 }
 
-/* EVIDENCE: issue 2.3 a stick whose force touches ur is reported and the
- * stick goes on */
+/* EVIDENCE: README "The model" (grazing): a stick whose force touches ur is
+ * reported and the stick goes on */
 static void test_stick_grazing(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -230,7 +233,8 @@ static void test_stick_grazing(void) {
   ss_sim_result_free(&r);
 }
 
-/* EVIDENCE: issue 2.3 perpetual slip is recognised without searching */
+/* EVIDENCE: README "The model" (perpetual slip): recognised without searching
+ */
 static void test_perpetual(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -246,7 +250,8 @@ static void test_perpetual(void) {
   ss_sim_result_free(&r);
 }
 
-/* EVIDENCE: header, a state at the threshold follows ss_mode_of_state */
+/* EVIDENCE: stickslip.h ss_mode_of_state: a state at the threshold follows the
+ * rule */
 static void test_threshold_start(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -325,7 +330,8 @@ static void test_samples_and_limits(void) {
   ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &rs, NULL), SS_EINVAL);
 }
 
-/* EVIDENCE: issue 2 "A run of 10^5 events completes" */
+/* EVIDENCE: README "How it works, and how it is checked" (simulation): "A run
+ * of 10^5 events completes" */
 static void test_long_run(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
