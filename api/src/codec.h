@@ -172,15 +172,18 @@ extern const api_spec API_PARAMS_SPEC, API_PHYSICAL_SPEC;
         API_HAS(type, m.has_physical), 1, 1, &API_PHYSICAL_SPEC                \
   }
 
-/* The keys of an orbit object, as /orbit returns it, that no request
- * reads: a client may send an orbit back as it got it. */
-#define API_ORBIT_IGNORED_FIELDS                                               \
-  {"kind", API_T_ANY}, {"period", API_T_ANY}, {"n_turns", API_T_ANY},          \
-      {"margins", API_T_ANY}, {"residual", API_T_ANY}, {"closure", API_T_ANY}, \
-      {"stability", API_T_ANY}, {"samples", API_T_ANY}, {"source", API_T_ANY}, \
-  {                                                                            \
-    "iterations", API_T_ANY                                                    \
-  }
+/* A key that is accepted and not read. */
+#define API_ANY(name)                                                          \
+  { name, API_T_ANY }
+
+/* The fields of an orbit object, as /orbit returns it, so that a client may
+ * send an orbit back as it got it: x0, z0 and phases as the endpoint reads
+ * them (API_ANY where it does not), every other key accepted and ignored. */
+#define API_ORBIT_FIELDS(x0, z0, phases)                                       \
+  x0, z0, phases, API_ANY("kind"), API_ANY("period"), API_ANY("n_turns"),      \
+      API_ANY("margins"), API_ANY("residual"), API_ANY("closure"),             \
+      API_ANY("stability"), API_ANY("samples"), API_ANY("source"),             \
+      API_ANY("iterations")
 
 /* Phase sequences: durations (2 to SS_MAX_PHASES numbers > 0) and modes
  * (as many mode names), as fields of a spec. */

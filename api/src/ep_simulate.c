@@ -80,12 +80,10 @@ static const api_field SAMPLE_FIELDS[] = {
 static const api_spec SAMPLE_SPEC = API_SPEC(SAMPLE_FIELDS);
 
 /* An orbit as /orbit returns it: only its start x0 is used. */
+#define X0                                                                     \
+  { "x0", API_T_VEC4, API_REQUIRED, 0, 0, NULL, 0 }
 static const api_field ORBIT_FIELDS[] = {
-    {"x0", API_T_VEC4, API_REQUIRED, 0, 0, NULL, 0},
-    {"z0", API_T_ANY},
-    {"phases", API_T_ANY},
-    API_ORBIT_IGNORED_FIELDS,
-};
+    API_ORBIT_FIELDS(X0, API_ANY("z0"), API_ANY("phases"))};
 static const api_spec ORBIT_SPEC = API_SPEC(ORBIT_FIELDS);
 
 static const api_field FIELDS[] = {

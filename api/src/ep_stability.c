@@ -103,13 +103,15 @@ static json_t *echo_phases(const void *dest) {
 static const api_custom PHASES = {decode_phases, echo_phases};
 
 /* An orbit as /orbit returns it: its phases and start z0 are used. */
+#define PHASES_FIELD                                                           \
+  {                                                                            \
+    "phases", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL,                          \
+        offsetof(stab_orbit, phases), 0, 0, 0, &PHASES                         \
+  }
+#define Z0_FIELD                                                               \
+  { "z0", API_T_VEC4, API_REQUIRED, 0, 0, NULL, offsetof(stab_orbit, z0) }
 static const api_field ORBIT_FIELDS[] = {
-    {"phases", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL,
-     offsetof(stab_orbit, phases), 0, 0, 0, &PHASES},
-    {"z0", API_T_VEC4, API_REQUIRED, 0, 0, NULL, offsetof(stab_orbit, z0)},
-    {"x0", API_T_ANY},
-    API_ORBIT_IGNORED_FIELDS,
-};
+    API_ORBIT_FIELDS(API_ANY("x0"), Z0_FIELD, PHASES_FIELD)};
 static const api_spec ORBIT_SPEC = API_SPEC(ORBIT_FIELDS);
 
 static const api_field FIELDS[] = {
