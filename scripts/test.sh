@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Set everything up and run the whole test suite twice: an optimised build
 # with -Wall -Wextra -Werror, then the same under AddressSanitizer and
-# UndefinedBehaviorSanitizer.
+# UndefinedBehaviorSanitizer; then the core's tests against libstickslip
+# built as a shared library.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -21,6 +22,15 @@ for variant in release sanitize; do
   (cd "$dir" && UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
      ASAN_OPTIONS=detect_leaks=1 ctest --output-on-failure -j"$jobs")
 done
+# The library as a shared object: it must link and work with only what its
+# header exports (no test may reach a hidden symbol).
+echo "== shared library build"
+cmake -S . -B build-test-shared -DSTICKSLIP_WERROR=ON -DSTICKSLIP_BUILD_TESTS=ON \
+  -DSTICKSLIP_BUILD_SERVER=OFF -DSTICKSLIP_BUILD_BENCH=OFF -DBUILD_SHARED_LIBS=ON \
+  -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+cmake --build build-test-shared -j"$jobs"
+echo "== shared library tests"
+(cd build-test-shared && ctest --output-on-failure -j"$jobs" -R '^(core_|readme_)')
 if command -v clang-format >/dev/null; then
   echo "== format check"
   cmake --build build-test-release --target format-check
