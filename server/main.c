@@ -93,18 +93,22 @@ static void set_value(srv_config *cfg, const flag *f, double v) {
 }
 
 static void usage(FILE *f, const srv_config *defaults) {
+  fprintf(f, "usage: stickslipd [options]\n\n"
+             "Serves the stick-slip orbit solver over HTTP/JSON:\n");
+  for (size_t i = 0; i < api_endpoint_count(); i++)
+    fprintf(f, "  %-5s %s\n", api_endpoint_at(i)->method,
+            api_endpoint_at(i)->path);
   fprintf(f,
-          "usage: stickslipd [options]\n"
-          "\n"
-          "Serves the stick-slip orbit solver over HTTP/JSON: POST /orbit,\n"
-          "/simulate, /stability; GET /health, /version, /openapi.json,\n"
-          "/metrics.  Prints the URL it listens on to stderr when ready.\n"
-          "\n"
+          "Prints the URL it listens on to stderr when ready.\n\n"
           "  --bind ADDR               address to listen on (STICKSLIP_BIND;\n"
           "                            default 127.0.0.1; IPv6 allowed)\n");
-  for (size_t i = 0; i < N_FLAGS; i++)
-    fprintf(f, "  %-25s %s (%g)\n", FLAGS[i].name, FLAGS[i].help,
+  for (size_t i = 0; i < N_FLAGS; i++) {
+    char name[40];
+    snprintf(name, sizeof name, "%s %s", FLAGS[i].name,
+             FLAGS[i].type == F_DOUBLE ? "X" : "N");
+    fprintf(f, "  %-25s %s (%.10g)\n", name, FLAGS[i].help,
             get_value(defaults, &FLAGS[i]));
+  }
   fprintf(f, "  --quiet                   no access log\n"
              "  --version                 print the version and exit\n"
              "  --help                    this text\n");

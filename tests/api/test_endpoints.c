@@ -11,6 +11,7 @@
 #include <jansson.h>
 #include <string.h>
 
+#include "codec.h"
 #include "stickslip_api.h"
 #include "test.h"
 
@@ -143,6 +144,40 @@ static void test_problem_table(void) {
   api_response_free(&r);
 }
 
+/* The answer the status table gives a core status. */
+static int http_of(int status) {
+  api_err e;
+  api_response r;
+  memset(&e, 0, sizeof e);
+  api__status(&e, status, "/x", "detail");
+  api__problem_response(&e, &r);
+  int st = r.status;
+  api_response_free(&r);
+  return st;
+}
+
+/* EVIDENCE: README "Errors": a failure of the core leaves as one row of the
+ * table whatever endpoint met it; a status missing from it is internal */
+static void test_status_table(void) {
+  ASSERT_EQ_INT(http_of(SS_EDOMAIN), 422);
+  ASSERT_EQ_INT(http_of(SS_EINVAL), 422);
+  ASSERT_EQ_INT(http_of(SS_ESINGULAR), 422);
+  ASSERT_EQ_INT(http_of(SS_ENOCONV), 422);
+  ASSERT_EQ_INT(http_of(SS_ELIMIT_EVENTS), 422);
+  ASSERT_EQ_INT(http_of(SS_ELIMIT_SAMPLES), 422);
+  ASSERT_EQ_INT(http_of(SS_ELIMIT_TIME), 422);
+  ASSERT_EQ_INT(http_of(SS_ENOMEM), 503);
+  ASSERT_EQ_INT(http_of(SS_EBUG), 500);
+  /* not a failure, and not in the table: never guessed */
+  ASSERT_EQ_INT(http_of(SS_INFEASIBLE), 500);
+  ASSERT_EQ_INT(http_of(-1000), 500);
+  api_err e;
+  memset(&e, 0, sizeof e);
+  api__status_limit(&e, SS_ELIMIT_TIME, "max_seconds", 2, "/t_end", "slow");
+  ASSERT_TRUE(e.kind == API_P_LIMIT && !strcmp(e.limit, "max_seconds"));
+  ASSERT_TRUE(!strcmp(e.pointer, "/t_end"));
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     fprintf(stderr, "usage: test_endpoints CASES_DIR\n");
@@ -151,5 +186,6 @@ int main(int argc, char **argv) {
   test_spec_and_table();
   test_cases_cover_table(argv[1]);
   test_problem_table();
+  test_status_table();
   TEST_DONE();
 }
