@@ -92,7 +92,8 @@ SS_API const char *ss_version(void);
   X(ELIMIT_TIME, -6, "compute time budget exhausted")                          \
   X(ENOMEM, -7, "out of memory")                                               \
   X(ESINGULAR, -8, "singular linear system")                                   \
-  X(EBUG, -9, "internal invariant violated")
+  X(EBUG, -9, "internal invariant violated")                                   \
+  X(ECANCELED, -10, "cancelled by the caller")
 
 enum {
 #define SS_STATUS_ENUM(name, value, msg) SS_##name = (value),
@@ -408,6 +409,11 @@ typedef struct ss_sim_opts {
                          none) */
   size_t max_samples; /**< limit on samples (0: none) */
   double max_seconds; /**< CPU/wall budget in seconds (0: none) */
+  /** Polled where the time budget is (every 256 events): a non-zero answer
+   *  stops the run with SS_ECANCELED.  NULL: never.  It may be called from
+   *  the computing thread only; make it cheap and thread-safe. */
+  int (*cancelled)(void *cls);
+  void *cancel_cls; /**< its argument */
 } ss_sim_opts;
 
 /** The result of ss_simulate(); release with ss_sim_result_free(). */
@@ -547,6 +553,10 @@ typedef struct ss_orbit_opts {
    *  the Poincare map (ss_stab_opts.difference_check). */
   int difference_check;
   double max_seconds; /**< time budget (0: none) */
+  /** Polled where the time budget is (between candidate solves): a non-zero
+   *  answer stops the search with SS_ECANCELED.  NULL: never. */
+  int (*cancelled)(void *cls);
+  void *cancel_cls; /**< its argument */
 } ss_orbit_opts;
 
 /** What the search did. */

@@ -31,10 +31,19 @@ typedef struct collect {
   double scale;
   ss_orbit_report *rep;
   double t_start, budget;
+  int (*cancelled)(void *);
+  void *cancel_cls;
+  int stopped; /* SS_ELIMIT_TIME or SS_ECANCELED once the search must stop */
 } collect;
 
-static int over_budget(const collect *c) {
-  return c->budget > 0 && ss__now() - c->t_start > c->budget;
+/* Whether the search must stop: its time budget is spent, or its caller
+ * cancelled it.  The first reason sticks. */
+static int over_budget(collect *c) {
+  if (!c->stopped && c->budget > 0 && ss__now() - c->t_start > c->budget)
+    c->stopped = SS_ELIMIT_TIME;
+  if (!c->stopped && c->cancelled && c->cancelled(c->cancel_cls))
+    c->stopped = SS_ECANCELED;
+  return c->stopped != 0;
 }
 
 /* Does orbit b pass through a's start with a's sequence rotated?  Compares
@@ -195,6 +204,9 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
   c.rep = rep;
   c.t_start = ss__now();
   c.budget = opts->max_seconds;
+  c.cancelled = opts->cancelled;
+  c.cancel_cls = opts->cancel_cls;
+  c.stopped = 0;
   *n_out = 0;
 
   if (opts->n_guess > 0) {
@@ -336,7 +348,11 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
              "no periodic orbit found: %d Newton starts gave %d roots, none "
              "feasible; %d simulations did not settle on a periodic motion",
              rep->newton_starts, rep->roots, rep->simulations);
-  if (over_budget(&c))
+  if (over_budget(&c) && c.stopped == SS_ECANCELED)
+    return ss__fail(d, SS_ECANCELED, "", 0,
+                    "the orbit search was cancelled after finding %d orbits",
+                    c.n);
+  if (c.stopped)
     return ss__fail(d, SS_ELIMIT_TIME, "max_seconds", c.budget,
                     "the orbit search ran out of its %g s budget after "
                     "finding %d orbits",

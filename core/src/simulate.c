@@ -338,6 +338,19 @@ static int push_event(ss_sim_result *r, size_t *cap, const ss_event *ev) {
   return SS_OK;
 }
 
+/* The time budget spent, or the caller cancelled: the status, else 0. */
+static int must_stop(const ss_sim_opts *o, double t_start, ss_diag *d,
+                     const ss_sim *s) {
+  if (o->max_seconds > 0 && ss__now() - t_start > o->max_seconds)
+    return ss__fail(d, SS_ELIMIT_TIME, "max_seconds", o->max_seconds,
+                    "compute time budget of %g s exhausted at t = %.17g",
+                    o->max_seconds, ss_sim_time(s));
+  if (o->cancelled && o->cancelled(o->cancel_cls))
+    return ss__fail(d, SS_ECANCELED, "", 0, "cancelled at t = %.17g",
+                    ss_sim_time(s));
+  return 0;
+}
+
 int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
                 ss_sim_result *r, ss_diag *d) {
   ss_sim s;
@@ -387,13 +400,8 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
                     o->max_events, o->t_end, ss_sim_time(&s));
       goto partial;
     }
-    if (o->max_seconds > 0 && (r->n_events & 255) == 255 &&
-        ss__now() - t_start > o->max_seconds) {
-      rc = ss__fail(d, SS_ELIMIT_TIME, "max_seconds", o->max_seconds,
-                    "compute time budget of %g s exhausted at t = %.17g",
-                    o->max_seconds, ss_sim_time(&s));
+    if ((r->n_events & 255) == 255 && (rc = must_stop(o, t_start, d, &s)))
       goto partial;
-    }
     /* samples of this phase, strictly before the event */
     if (sp.i < sp.n)
       emit_samples(&sp, &s, s.t_hi + (s.t_lo + tau), 1);

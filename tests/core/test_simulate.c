@@ -347,8 +347,50 @@ static void test_long_run(void) {
   ss_sim_result_free(&r);
 }
 
+/* A caller's cancel flag that rises after @a after polls. */
+typedef struct cancel_after {
+  int polls, after;
+} cancel_after;
+
+static int cancel_now(void *cls) {
+  cancel_after *c = cls;
+  return ++c->polls > c->after;
+}
+
+/* EVIDENCE: stickslip.h ss_sim_opts.cancelled: polled every 256 events, a
+ * non-zero answer stops the run with SS_ECANCELED */
+static void test_cancel(void) {
+  ss_model m;
+  ss_model_init(&m, &PAPER, NULL);
+  double x0[4];
+  ss_z_to_x(&m, PAPER_Z0, x0);
+  cancel_after c = {0, 3};
+  ss_sim_opts o = {0};
+  o.t_end = 1e300;
+  o.stop_after = 100000;
+  o.cancelled = cancel_now;
+  o.cancel_cls = &c;
+  ss_sim_result r;
+  ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &r, NULL), SS_ECANCELED);
+  /* polled at events 255, 511, 767, 1023: stopped at the fourth */
+  ASSERT_EQ_INT(c.polls, 4);
+  ASSERT_EQ_INT(r.n_events, 1023);
+  ss_sim_result_free(&r);
+  /* and the orbit search, between its candidate solves */
+  ss_orbit out[8];
+  int n = 0;
+  ss_orbit_opts oo = {0};
+  c.polls = 0;
+  c.after = 0;
+  oo.cancelled = cancel_now;
+  oo.cancel_cls = &c;
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, out, 8, &n, NULL, NULL), SS_ECANCELED);
+  ASSERT_TRUE(c.polls >= 1);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
+  test_cancel();
   test_paper_run();
   test_battery();
   test_scaling();
