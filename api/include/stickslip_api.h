@@ -91,6 +91,11 @@ typedef struct api_server_info {
    *  memory); NULL when the server keeps none. */
   char *(*metrics_text)(void *cls);
   void *metrics_cls;
+  /** Whether the client has gone away: polled by long computations, which
+   *  then stop (answered client-closed-request, which nobody reads).  NULL:
+   *  never. */
+  int (*cancelled)(void *cls);
+  void *cancel_cls;
 } api_server_info;
 
 /**
@@ -115,6 +120,7 @@ int api_handle(size_t index, const char *body, size_t len,
  */
 #define API_PROBLEM_MAP(X)                                                     \
   X(INVALID_JSON, 400, "invalid-json", "Bad Request")                          \
+  X(BAD_REQUEST, 400, "bad-request", "Bad Request")                            \
   X(NOT_FOUND, 404, "not-found", "Not Found")                                  \
   X(METHOD_NOT_ALLOWED, 405, "method-not-allowed", "Method Not Allowed")       \
   X(BODY_TOO_LARGE, 413, "limit-exceeded", "Content Too Large")                \
@@ -125,6 +131,7 @@ int api_handle(size_t index, const char *body, size_t len,
   X(UNKNOWN_FIELD, 422, "unknown-field", "Unprocessable Content")              \
   X(NO_CONVERGENCE, 422, "no-convergence", "Unprocessable Content")            \
   X(LIMIT, 422, "limit-exceeded", "Request over a limit")                      \
+  X(CLIENT_CLOSED, 499, "client-closed-request", "Client Closed Request")      \
   X(INTERNAL, 500, "internal", "Internal Server Error")                        \
   X(OVERLOADED, 503, "overloaded", "Service Unavailable")                      \
   X(OUT_OF_MEMORY, 503, "out-of-memory", "Service Unavailable")                \

@@ -2,8 +2,10 @@
  * endpoints.c: the endpoint table at work: routing, and one request served
  * as parse -> decode -> run -> encode.
  */
+#define _POSIX_C_SOURCE 200809L
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "endpoints.h"
 
@@ -111,6 +113,12 @@ static json_t *parse(const char *body, size_t len, const api_limits *lim,
   return root;
 }
 
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 int api_handle(size_t index, const char *body, size_t len,
                const api_limits *lim, const api_server_info *srv,
                api_response *out) {
@@ -131,8 +139,15 @@ int api_handle(size_t index, const char *body, size_t len,
     api__problem_response(&e, out);
     return out->status;
   }
-  if (ep->decode(root, &c, &x) == 0 && ep->run(x, &c) == 0)
-    ep->encode(x, &c, out);
+  double t0 = now();
+  if (ep->decode(root, &c, &x) == 0 && ep->run(x, &c) == 0 &&
+      ep->encode(x, &c, out) == 0 && ep->pub.run_class == API_RUN_COMPUTE &&
+      lim->max_seconds > 0 && now() - t0 > lim->max_seconds)
+    /* the compute-time limit covers the encoding of the answer too */
+    api__limit(&e, "max_seconds", lim->max_seconds, "",
+               "computing and encoding the answer took %.3g s, over the "
+               "limit of %g s",
+               now() - t0, lim->max_seconds);
   ep->release(x);
   json_decref(root);
   if (e.set) {

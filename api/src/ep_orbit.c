@@ -98,6 +98,14 @@ static void to_core(orbit_x *x, const api_limits *lim) {
   o->max_seconds = lim->max_seconds;
 }
 
+/* The client's hang-up, as the server reports it, stops the search. */
+static void cancel_hook(ss_orbit_opts *o, const api_call *c) {
+  if (c->srv && c->srv->cancelled) {
+    o->cancelled = c->srv->cancelled;
+    o->cancel_cls = c->srv->cancel_cls;
+  }
+}
+
 int ep_orbit_decode(const json_t *root, const api_call *c, void **xp) {
   orbit_x *x = api__alloc(sizeof *x, xp, c);
   if (!x)
@@ -110,6 +118,7 @@ int ep_orbit_decode(const json_t *root, const api_call *c, void **xp) {
       (x->has_guess && guess_modes(&x->guess, c)))
     return -1;
   to_core(x, c->lim);
+  cancel_hook(&x->opts, c);
   return api__model(&x->m, &x->ap, c);
 }
 
@@ -128,6 +137,8 @@ static int sample_paths(orbit_x *x, const api_call *c) {
     so.sample_to = o->period;
     so.max_events = 64 * (size_t)o->n_phases;
     so.max_seconds = c->lim->max_seconds;
+    so.cancelled = x->opts.cancelled;
+    so.cancel_cls = x->opts.cancel_cls;
     int rc = ss_simulate(&x->m, o->x0, &so, &x->paths[i], NULL);
     if (rc != SS_OK)
       ss_sim_result_free(&x->paths[i]);

@@ -156,6 +156,10 @@ static int to_core(sim_x *x, const api_call *c) {
                         : lim->max_events;
   x->o.max_samples = lim->max_samples;
   x->o.max_seconds = lim->max_seconds;
+  if (c->srv && c->srv->cancelled) {
+    x->o.cancelled = c->srv->cancelled;
+    x->o.cancel_cls = c->srv->cancel_cls;
+  }
   return 0;
 }
 

@@ -36,7 +36,8 @@ static const problem_row PROBLEMS[API_P_COUNT] = {
   X(SS_ELIMIT_SAMPLES, LIMIT)                                                  \
   X(SS_ELIMIT_TIME, LIMIT)                                                     \
   X(SS_ENOMEM, OUT_OF_MEMORY)                                                  \
-  X(SS_EBUG, INTERNAL)
+  X(SS_EBUG, INTERNAL)                                                         \
+  X(SS_ECANCELED, CLIENT_CLOSED)
 
 static int kind_of_status(int status, api_problem_kind *kind) {
   switch (status) {
