@@ -18,7 +18,7 @@ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DSTICKSLIP_BUILD_TESTS=OFF >/
 cmake --build "$build" -j"$(nproc)" --target stickslipd >/dev/null
 tmp=$(mktemp -d)
 trap 'kill "$pid" 2>/dev/null || true; wait "$pid" 2>/dev/null || true; rm -rf "$tmp"' EXIT
-"$build/server/stickslipd" --port 0 --quiet --queue-timeout 30 2>"$tmp/log" &
+"$build/server/stickslipd" --port 0 --quiet --client-queue 100000 --client-workers "$(nproc)" 2>"$tmp/log" &
 pid=$!
 for _ in $(seq 100); do grep -q listening "$tmp/log" && break; sleep 0.05; done
 url=$(grep -o 'http://[^ ]*' "$tmp/log" | head -1)

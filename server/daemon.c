@@ -1,25 +1,39 @@
 /*
- * daemon.c: routing, body accumulation, admission control, logging.
+ * daemon.c: HTTP with libmicrohttpd: routing, bodies, admission, the
+ * compute pool's requests, the watch over clients, logging.
  *
- * Threading: libmicrohttpd's thread-per-connection mode, the one mode in
- * which a callback may block; so a long computation holds only its own
- * connection's thread and a short request (/health) never waits behind it.
- * Computations are admitted through a counting semaphore of cfg->workers
- * slots; a request that cannot get a slot within cfg->queue_timeout is
- * answered 503 with Retry-After.  Each connection is bounded in memory
- * (MHD_OPTION_CONNECTION_MEMORY_LIMIT) and in idle time; bodies are bounded
- * by cfg->lim.max_body, refused with 413 from Content-Length when possible.
+ * Sockets.  One internal polling thread with epoll
+ * (MHD_USE_EPOLL_INTERNAL_THREAD): an idle or slow connection costs a
+ * socket, not a thread.  What needs no computing (the api's inline
+ * endpoints, and every refusal) is answered on that thread at once.
+ *
+ * Compute.  A request that computes is suspended once its body is in
+ * (MHD_suspend_connection), handed to the pool (pool.c: per-client queues,
+ * round robin, a bounded queue per client, at most client_workers running
+ * per client), and resumed with its answer by the worker that computed it.
+ *
+ * Watch.  While a connection is suspended libmicrohttpd does not look at
+ * its socket, so a monitor thread does, every MONITOR_MS: a peer that has
+ * closed its end has its waiting work dropped and its running work flagged
+ * (the core polls the flag).  The monitor also closes connections that do
+ * not deliver a whole request (headers and body) within request_timeout of
+ * their start or of the end of their previous request: libmicrohttpd's own
+ * timeout counts idle time only, which a byte every few seconds resets.
+ *
+ * Framing that could smuggle a request (two Content-Length headers,
+ * Content-Length with Transfer-Encoding, two Host headers) is refused with
+ * 400 and the connection is closed.
  */
 #define _GNU_SOURCE
 #include <arpa/inet.h>
 #include <errno.h>
-#include <math.h>
 #include <netinet/in.h>
-#include <semaphore.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <time.h>
 #include <unistd.h>
@@ -28,34 +42,57 @@
 
 #include "server.h"
 
-/* A body that trickles in for longer than this is dropped (slow loris). */
-#define BODY_SECONDS 10.0
+#define MONITOR_MS 20
+
+/* One TCP connection, from NOTIFY_CONNECTION's start to its close. */
+typedef struct conn {
+  struct conn *prev, *next;
+  int fd;
+  double start;  /* of the request being received */
+  int receiving; /* 0 once the current request is wholly received */
+  int shut;      /* the monitor closed it */
+  char key[SRV_CLIENT_KEY];
+} conn;
 
 struct srv_daemon {
   struct MHD_Daemon *mhd;
   srv_config cfg;
-  sem_t slots;
   srv_metrics *metrics;
+  srv_pool *pool;
   char transport[48];
   atomic_int draining;
   double started;
+  pthread_mutex_t mu; /* the connection list */
+  conn *conns;
+  pthread_t monitor;
+  atomic_int monitor_stop;
+  int monitor_running;
 };
 
+enum { R_FRESH = 0, R_ANSWERED = 1 };
+
 typedef struct req {
+  srv_job job; /* first: a job is its request */
+  struct srv_daemon *d;
+  struct MHD_Connection *c;
+  conn *cn;
   size_t ep; /* endpoint index; api_endpoint_count() until routed */
   int is_post;
   int status;
   int done; /* a response was queued */
+  int close;
+  int answered; /* the pool handed the request back with r->ar */
   char *buf;
   size_t len, cap;
   int too_big;
   double t0;
   char method[8];
   char path[96];
+  api_response ar;
   /* An answer decided on the first call, sent on a later one: libmicrohttpd
    * handles a response queued during the first call of a request far more
-   * slowly (about 200 us each, serialised), so only the 413 that must stop a
-   * large body is queued that early. */
+   * slowly (about 200 us each, serialised), so only what must stop a body
+   * (413, and framing that could smuggle a request) is queued that early. */
   int p_status;
   api_problem_kind p_kind;
   const char *p_allow;
@@ -70,14 +107,13 @@ static double now(void) {
 
 static enum MHD_Result send_body(struct MHD_Connection *c, req *r, int status,
                                  char *body, size_t len, const char *ctype,
-                                 int must_free, int retry_after,
-                                 const char *allow, int close) {
-  struct MHD_Response *resp = MHD_create_response_from_buffer(
-      len, body, must_free ? MHD_RESPMEM_MUST_FREE : MHD_RESPMEM_PERSISTENT);
+                                 int retry_after, const char *allow,
+                                 int close) {
+  struct MHD_Response *resp =
+      MHD_create_response_from_buffer(len, body, MHD_RESPMEM_MUST_FREE);
   enum MHD_Result ok;
   if (!resp) {
-    if (must_free)
-      free(body);
+    free(body);
     return MHD_NO;
   }
   MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
@@ -95,14 +131,14 @@ static enum MHD_Result send_body(struct MHD_Connection *c, req *r, int status,
   return ok;
 }
 
-/* An answer of the api: a 503 always says when to come back, and a 413 or
- * 503 closes the connection. */
+/* An answer of the api: a 503 always says when to come back, and a 413,
+ * a 503 or a refused framing closes the connection. */
 static enum MHD_Result send_api(struct MHD_Connection *c, req *r,
                                 api_response *ar, const char *allow) {
   int busy = ar->status == 503;
   enum MHD_Result ok =
-      send_body(c, r, ar->status, ar->body, ar->len, ar->content_type, 1, busy,
-                allow, busy || ar->status == 413);
+      send_body(c, r, ar->status, ar->body, ar->len, ar->content_type, busy,
+                allow, busy || ar->status == 413 || r->close);
   ar->body = NULL;
   return ok;
 }
@@ -120,16 +156,76 @@ static char *metrics_text(void *cls) {
   return srv_metrics_render(((struct srv_daemon *)cls)->metrics);
 }
 
+static int job_cancelled(void *cls) {
+  return atomic_load(&((srv_job *)cls)->cancel);
+}
+
 /* One request to the api, with what the daemon knows of itself. */
 static void handle(struct srv_daemon *d, req *r, api_response *ar) {
   api_server_info info = {now() - d->started,
-                          srv_metrics_in_flight(d->metrics, 0), d->transport,
-                          metrics_text, d};
+                          srv_metrics_in_flight(d->metrics, 0),
+                          d->transport,
+                          metrics_text,
+                          d,
+                          job_cancelled,
+                          &r->job};
   api_handle(r->ep, r->buf ? r->buf : "", r->len, &d->cfg.lim, &info, ar);
   if (ar->status >= 500 && ar->status != 503)
     fprintf(stderr, "stickslipd: %s %s answered %d: %.200s\n", r->method,
             r->path, ar->status, ar->body ? ar->body : "");
 }
+
+/* ---- the pool's side of a request ---------------------------------------- */
+
+static void job_queued(srv_job *j) { MHD_suspend_connection(((req *)j)->c); }
+
+static void job_run(srv_job *j) {
+  req *r = (req *)j;
+  handle(r->d, r, &r->ar);
+}
+
+/* Back to the I/O thread with an answer: the pool is done with the job. */
+static void job_done(srv_job *j) {
+  req *r = (req *)j;
+  if (j->state == SRV_JOB_CANCELLED) {
+    api_response_free(&r->ar);
+    api_problem(&r->ar, API_P_CLIENT_CLOSED, "the client went away", NULL, NULL,
+                0);
+    srv_metrics_cancelled(r->d->metrics);
+  } else if (j->state == SRV_JOB_REFUSED) {
+    api_problem(&r->ar, API_P_SHUTTING_DOWN,
+                "the server is shutting down; retry on another replica or "
+                "later",
+                NULL, NULL, 0);
+  }
+  r->answered = 1;
+  MHD_resume_connection(r->c);
+}
+
+/* The body is in: queue the computation, or refuse it at once. */
+static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
+                              req *r) {
+  if (atomic_load(&d->draining))
+    return send_problem(c, r, API_P_SHUTTING_DOWN,
+                        "the server is shutting down", NULL, 0, NULL);
+  int rc = srv_pool_submit(d->pool, &r->job, r->cn ? r->cn->key : "?");
+  if (rc == 0)
+    return MHD_YES; /* suspended by job_queued; resumed by job_done */
+  if (rc == SRV_POOL_FULL) {
+    char detail[128];
+    srv_metrics_busy(d->metrics);
+    snprintf(detail, sizeof detail,
+             "this client already has %u computations waiting; retry after "
+             "a second",
+             d->cfg.client_queue);
+    return send_problem(c, r, API_P_OVERLOADED, detail, NULL, 0, NULL);
+  }
+  return send_problem(
+      c, r, rc == SRV_POOL_NOMEM ? API_P_OUT_OF_MEMORY : API_P_SHUTTING_DOWN,
+      "the computation could not be queued", NULL, 0, NULL);
+}
+
+/* ---- headers ------------------------------------------------------------- */
 
 static int is_json_type(const char *ct) {
   if (!ct)
@@ -141,40 +237,33 @@ static int is_json_type(const char *ct) {
          (ct[n] == 0 || ct[n] == ';' || ct[n] == ' ');
 }
 
-static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
-                               req *r) {
-  struct timespec dl;
-  api_response ar;
-  clock_gettime(CLOCK_REALTIME, &dl);
-  double w = d->cfg.queue_timeout;
-  dl.tv_sec += (time_t)w;
-  dl.tv_nsec += (long)((w - floor(w)) * 1e9);
-  if (dl.tv_nsec >= 1000000000L) {
-    dl.tv_sec++;
-    dl.tv_nsec -= 1000000000L;
-  }
-  int got;
-  while ((got = sem_timedwait(&d->slots, &dl)) != 0 && errno == EINTR)
-    ;
-  if (got != 0) {
-    srv_metrics_busy(d->metrics);
-    return send_problem(c, r, API_P_OVERLOADED,
-                        "every compute slot stayed busy; retry after a second",
-                        NULL, 0, NULL);
-  }
-  handle(d, r, &ar);
-  sem_post(&d->slots);
-  return send_api(c, r, &ar, NULL);
+typedef struct framing {
+  int content_length, transfer_encoding, host;
+} framing;
+
+static enum MHD_Result count_header(void *cls, enum MHD_ValueKind kind,
+                                    const char *key, const char *value) {
+  framing *f = cls;
+  (void)kind;
+  (void)value;
+  f->content_length += strcasecmp(key, "Content-Length") == 0;
+  f->transfer_encoding += strcasecmp(key, "Transfer-Encoding") == 0;
+  f->host += strcasecmp(key, "Host") == 0;
+  return MHD_YES;
 }
 
-/* 413: the body is over the limit (from Content-Length, or as it came). */
-static enum MHD_Result too_large(struct srv_daemon *d, struct MHD_Connection *c,
-                                 req *r) {
-  char detail[128];
-  snprintf(detail, sizeof detail, "the body is over the limit of %zu bytes",
-           d->cfg.lim.max_body);
-  return send_problem(c, r, API_P_BODY_TOO_LARGE, detail, "max_body",
-                      (double)d->cfg.lim.max_body, NULL);
+/* Headers that would let two parties read different requests out of the
+ * same bytes; NULL when there are none. */
+static const char *smuggling(struct MHD_Connection *c) {
+  framing f = {0, 0, 0};
+  MHD_get_connection_values(c, MHD_HEADER_KIND, count_header, &f);
+  if (f.content_length > 1)
+    return "more than one Content-Length header";
+  if (f.content_length && f.transfer_encoding)
+    return "Content-Length together with Transfer-Encoding";
+  if (f.host > 1)
+    return "more than one Host header";
+  return NULL;
 }
 
 /* Decide an error answer now, send it on the next call. */
@@ -188,16 +277,36 @@ static enum MHD_Result defer(req *r, api_problem_kind kind, const char *detail,
   return MHD_YES;
 }
 
+/* 413: the body is over the limit (from Content-Length, or as it came). */
+static enum MHD_Result too_large(struct srv_daemon *d, struct MHD_Connection *c,
+                                 req *r) {
+  char detail[128];
+  snprintf(detail, sizeof detail, "the body is over the limit of %zu bytes",
+           d->cfg.lim.max_body);
+  return send_problem(c, r, API_P_BODY_TOO_LARGE, detail, "max_body",
+                      (double)d->cfg.lim.max_body, NULL);
+}
+
 /* The first call of a request: its headers are in.  Route it, and refuse
  * now what can be refused from the headers alone. */
 static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
                              req *r, const char *url, const char *method) {
   size_t ep;
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+  r->d = d;
+  r->c = c;
+  r->cn = ci ? ci->socket_context : NULL;
   r->t0 = now();
   r->ep = api_endpoint_count();
   snprintf(r->method, sizeof r->method, "%s", method);
   snprintf(r->path, sizeof r->path, "%s", url);
   srv_metrics_in_flight(d->metrics, +1);
+  const char *bad = smuggling(c);
+  if (bad) {
+    r->close = 1;
+    return send_problem(c, r, API_P_BAD_REQUEST, bad, NULL, 0, NULL);
+  }
   if (atomic_load(&d->draining))
     return defer(r, API_P_SHUTTING_DOWN, "the server is shutting down", NULL);
   int route = api_route(method, url, &ep);
@@ -234,8 +343,6 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
 /* A piece of the body: kept while it fits the limit, counted over it. */
 static enum MHD_Result take_body(struct srv_daemon *d, req *r, const char *data,
                                  size_t n) {
-  if (now() - r->t0 > BODY_SECONDS)
-    return MHD_NO;
   if (r->too_big || r->len + n > d->cfg.lim.max_body) {
     r->too_big = 1;
     return MHD_YES;
@@ -256,6 +363,15 @@ static enum MHD_Result take_body(struct srv_daemon *d, req *r, const char *data,
   return MHD_YES;
 }
 
+/* The request is wholly received: the monitor's deadline no longer runs. */
+static void received(struct srv_daemon *d, req *r) {
+  if (!r->cn)
+    return;
+  pthread_mutex_lock(&d->mu);
+  r->cn->receiving = 0;
+  pthread_mutex_unlock(&d->mu);
+}
+
 static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
                                const char *url, const char *method,
                                const char *version, const char *upload_data,
@@ -269,12 +385,15 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
     *con_cls = r;
     return admit(d, c, r, url, method);
   }
+  if (r->answered) /* resumed by the pool */
+    return send_api(c, r, &r->ar, NULL);
   if (r->done || r->p_status) {
     /* an answer is decided: discard whatever body still comes */
     if (*upload_data_size || r->done) {
       *upload_data_size = 0;
       return MHD_YES;
     }
+    received(d, r);
     return send_problem(c, r, r->p_kind, r->p_detail, NULL, 0, r->p_allow);
   }
   if (*upload_data_size) {
@@ -282,6 +401,7 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
     *upload_data_size = 0;
     return take_body(d, r, upload_data, n);
   }
+  received(d, r);
   if (r->too_big)
     return too_large(d, c, r);
   if (!r->is_post) {
@@ -289,7 +409,7 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
     handle(d, r, &ar);
     return send_api(c, r, &ar, NULL);
   }
-  return compute(d, c, r);
+  return submit(d, c, r);
 }
 
 static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
@@ -297,20 +417,120 @@ static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
   struct srv_daemon *d = cls;
   req *r = *con_cls;
   (void)c;
+  (void)toe;
   if (!r)
     return;
   double dt = now() - r->t0;
   int status = r->done ? r->status : 499; /* 499: client went away */
-  (void)toe;
   srv_metrics_observe(d->metrics, r->ep, status, dt);
   srv_metrics_in_flight(d->metrics, -1);
   if (!d->cfg.quiet)
     fprintf(stderr, "%s %s %d %ld\n", r->method, r->path, status,
             (long)(dt * 1e6));
+  if (r->cn) {
+    /* the next request on this connection has its own deadline */
+    pthread_mutex_lock(&d->mu);
+    r->cn->start = now();
+    r->cn->receiving = 1;
+    pthread_mutex_unlock(&d->mu);
+  }
+  api_response_free(&r->ar);
   free(r->buf);
   free(r);
   *con_cls = NULL;
 }
+
+/* ---- connections and the monitor ------------------------------------------
+ */
+
+static void client_key(struct MHD_Connection *c, char *key, size_t n) {
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+  const struct sockaddr *sa = ci ? ci->client_addr : NULL;
+  snprintf(key, n, "?");
+  if (sa && sa->sa_family == AF_INET)
+    inet_ntop(AF_INET, &((const struct sockaddr_in *)sa)->sin_addr, key,
+              (socklen_t)n);
+  else if (sa && sa->sa_family == AF_INET6)
+    inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)sa)->sin6_addr, key,
+              (socklen_t)n);
+}
+
+static void connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
+                       enum MHD_ConnectionNotificationCode toe) {
+  struct srv_daemon *d = cls;
+  conn *cn = *socket_ctx;
+  if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
+    if (!ci || !(cn = calloc(1, sizeof *cn)))
+      return;
+    cn->fd = ci->connect_fd;
+    cn->start = now();
+    cn->receiving = 1;
+    client_key(c, cn->key, sizeof cn->key);
+    pthread_mutex_lock(&d->mu);
+    cn->next = d->conns;
+    if (d->conns)
+      d->conns->prev = cn;
+    d->conns = cn;
+    pthread_mutex_unlock(&d->mu);
+    *socket_ctx = cn;
+    return;
+  }
+  if (!cn)
+    return;
+  pthread_mutex_lock(&d->mu);
+  if (cn->prev)
+    cn->prev->next = cn->next;
+  else
+    d->conns = cn->next;
+  if (cn->next)
+    cn->next->prev = cn->prev;
+  pthread_mutex_unlock(&d->mu);
+  free(cn);
+  *socket_ctx = NULL;
+}
+
+/* Has the peer of a suspended request closed its end?  A read that finds
+ * the end of the stream (or a reset) says so; pending bytes (a pipelined
+ * request) or nothing to read say it is still there. */
+static int peer_gone(srv_job *j) {
+  req *r = (req *)j;
+  char b;
+  if (!r->cn)
+    return 0;
+  ssize_t k = recv(r->cn->fd, &b, 1, MSG_PEEK | MSG_DONTWAIT);
+  return k == 0 ||
+         (k < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
+}
+
+/* Close the connections that are past their deadline for a request. */
+static void reap_slow(struct srv_daemon *d) {
+  double t = now();
+  pthread_mutex_lock(&d->mu);
+  for (conn *cn = d->conns; cn; cn = cn->next)
+    if (cn->receiving && !cn->shut && t - cn->start > d->cfg.request_timeout) {
+      shutdown(cn->fd, SHUT_RDWR);
+      cn->shut = 1;
+      srv_metrics_slow(d->metrics);
+    }
+  pthread_mutex_unlock(&d->mu);
+}
+
+static void *monitor(void *arg) {
+  struct srv_daemon *d = arg;
+  struct timespec ts = {0, MONITOR_MS * 1000000L};
+  while (!atomic_load(&d->monitor_stop)) {
+    srv_pool_watch(d->pool, peer_gone);
+    reap_slow(d);
+    nanosleep(&ts, NULL);
+  }
+  return NULL;
+}
+
+/* ---- start and stop --------------------------------------------------------
+ */
 
 /* The listening address of --bind and --port; 0, or -1 when --bind is not
  * an IPv4 or IPv6 address. */
@@ -343,34 +563,54 @@ static int bound_port(struct MHD_Daemon *mhd, int asked) {
              : ntohs(((struct sockaddr_in *)&got)->sin_port);
 }
 
+/* Enough descriptors for every connection the flags allow. */
+static void raise_fd_limit(unsigned max_conn) {
+  struct rlimit rl;
+  if (getrlimit(RLIMIT_NOFILE, &rl) != 0)
+    return;
+  rlim_t want = (rlim_t)max_conn + 64;
+  if (rl.rlim_cur < want) {
+    rl.rlim_cur = rl.rlim_max < want ? rl.rlim_max : want;
+    setrlimit(RLIMIT_NOFILE, &rl);
+  }
+}
+
 static void daemon_free(struct srv_daemon *d) {
+  if (d->monitor_running) {
+    atomic_store(&d->monitor_stop, 1);
+    pthread_join(d->monitor, NULL);
+  }
+  srv_pool_free(d->pool);
   srv_metrics_free(d->metrics);
+  pthread_mutex_destroy(&d->mu);
   free(d);
 }
 
 struct srv_daemon *srv_start(const srv_config *cfg) {
   struct srv_daemon *d = calloc(1, sizeof *d);
   struct sockaddr_storage ss;
-  unsigned flags = MHD_USE_INTERNAL_POLLING_THREAD |
-                   MHD_USE_THREAD_PER_CONNECTION | MHD_USE_AUTO | MHD_USE_ITC |
+  unsigned flags = MHD_USE_EPOLL_INTERNAL_THREAD | MHD_ALLOW_SUSPEND_RESUME |
                    MHD_USE_ERROR_LOG;
-  if (!d || !(d->metrics = srv_metrics_new())) {
-    free(d);
+  if (!d)
     return NULL;
-  }
+  pthread_mutex_init(&d->mu, NULL);
   d->cfg = *cfg;
   d->started = now();
   snprintf(d->transport, sizeof d->transport, "%s", MHD_get_version());
+  srv_pool_cfg pc = {cfg->workers,      cfg->client_workers,
+                     cfg->client_queue, job_queued,
+                     job_run,           job_done};
+  if (!(d->metrics = srv_metrics_new()) || !(d->pool = srv_pool_new(&pc))) {
+    daemon_free(d);
+    return NULL;
+  }
   if (listen_address(cfg, &ss, &flags)) {
     fprintf(stderr, "stickslipd: --bind %s is not an IPv4 or IPv6 address\n",
             cfg->bind);
     daemon_free(d);
     return NULL;
   }
-  if (sem_init(&d->slots, 0, cfg->workers) != 0) {
-    daemon_free(d);
-    return NULL;
-  }
+  raise_fd_limit(cfg->max_conn);
   d->mhd = MHD_start_daemon(
       flags, (uint16_t)cfg->port, NULL, NULL, handler, d, MHD_OPTION_SOCK_ADDR,
       (struct sockaddr *)&ss, MHD_OPTION_CONNECTION_LIMIT, cfg->max_conn,
@@ -378,14 +618,16 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
       MHD_OPTION_CONNECTION_TIMEOUT, cfg->timeout,
       MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)65536,
       MHD_OPTION_STRICT_FOR_CLIENT, (int)1, MHD_OPTION_NOTIFY_COMPLETED,
-      completed, d, MHD_OPTION_END);
+      completed, d, MHD_OPTION_NOTIFY_CONNECTION, connection, d,
+      MHD_OPTION_END);
   if (!d->mhd) {
     fprintf(stderr, "stickslipd: cannot listen on %s port %d: %s\n", cfg->bind,
             cfg->port, strerror(errno));
-    sem_destroy(&d->slots);
     daemon_free(d);
     return NULL;
   }
+  if (pthread_create(&d->monitor, NULL, monitor, d) == 0)
+    d->monitor_running = 1;
   int port = bound_port(d->mhd, cfg->port);
   if (strchr(cfg->bind, ':'))
     fprintf(stderr, "stickslipd listening on http://[%s]:%d\n", cfg->bind,
@@ -396,19 +638,34 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
   return d;
 }
 
+static void wait_in_flight(struct srv_daemon *d, double until) {
+  struct timespec ts = {0, 10 * 1000 * 1000};
+  while (srv_metrics_in_flight(d->metrics, 0) > 0 && now() < until)
+    nanosleep(&ts, NULL);
+}
+
 void srv_stop(struct srv_daemon *d) {
   if (!d)
     return;
+  /* new connections are refused from now on */
   atomic_store(&d->draining, 1);
   MHD_socket fd = MHD_quiesce_daemon(d->mhd);
-  double until = now() + d->cfg.drain;
-  while (srv_metrics_in_flight(d->metrics, 0) > 0 && now() < until) {
-    struct timespec ts = {0, 10 * 1000 * 1000};
-    nanosleep(&ts, NULL);
-  }
-  MHD_stop_daemon(d->mhd);
   if (fd != MHD_INVALID_SOCKET)
     close(fd);
-  sem_destroy(&d->slots);
+  /* what waits is answered 503; what runs finishes within the drain, or is
+   * stopped after it; every suspended request is resumed before the
+   * daemon stops, as libmicrohttpd requires */
+  srv_pool_drain(d->pool);
+  double until = now() + d->cfg.drain;
+  if (!srv_pool_wait_idle(d->pool, d->cfg.drain)) {
+    srv_pool_cancel_all(d->pool);
+    srv_pool_wait_idle(d->pool, 5);
+  }
+  wait_in_flight(d, until > now() + 1 ? until : now() + 1);
+  atomic_store(&d->monitor_stop, 1);
+  if (d->monitor_running)
+    pthread_join(d->monitor, NULL);
+  d->monitor_running = 0;
+  MHD_stop_daemon(d->mhd);
   daemon_free(d);
 }

@@ -46,8 +46,12 @@ static const flag FLAGS[] = {
     {"--max-depth", F_INT, 2, 2048, CFG(lim.max_depth), "JSON nesting depth"},
     {"--workers", F_UNSIGNED, 1, 1024, CFG(workers),
      "computations at once (default: the number of cores)"},
-    {"--queue-timeout", F_DOUBLE, 0, 600, CFG(queue_timeout),
-     "wait for a compute slot before 503, seconds"},
+    {"--client-workers", F_UNSIGNED, 1, 1024, CFG(client_workers),
+     "computations of one client at once (default: workers - 1, at least 1)"},
+    {"--client-queue", F_UNSIGNED, 0, 1 << 20, CFG(client_queue),
+     "computations of one client waiting; more get 503 at once"},
+    {"--request-timeout", F_DOUBLE, 0.1, 3600, CFG(request_timeout),
+     "deadline for a request's headers and body, seconds"},
     {"--max-connections", F_UNSIGNED, 1, 65536, CFG(max_conn),
      "open connections"},
     {"--per-ip-connections", F_UNSIGNED, 1, 65536, CFG(per_ip),
@@ -135,13 +139,16 @@ static void defaults(srv_config *cfg) {
   snprintf(cfg->bind, sizeof cfg->bind, "127.0.0.1");
   cfg->port = 8080;
   api_limits_default(&cfg->lim);
-  cfg->max_conn = 256;
-  cfg->per_ip = 64;
+  cfg->max_conn = 2048;
+  cfg->per_ip = 1024;
   cfg->timeout = 10;
   long nc = sysconf(_SC_NPROCESSORS_ONLN);
   cfg->workers = nc > 0 ? (unsigned)nc : 1;
-  cfg->queue_timeout = 2;
-  cfg->drain = 8;
+  cfg->client_queue = 64;
+  cfg->request_timeout = 10;
+  /* longer than a computation may take, so that the requests in flight at
+   * a shutdown get their answers */
+  cfg->drain = 15;
 }
 
 /* The environment, then the flags.  Returns -1 to exit 0 (--help,
@@ -197,6 +204,8 @@ int main(int argc, char **argv) {
   int rc = configure(&cfg, argc, argv);
   if (rc)
     return rc < 0 ? 0 : rc;
+  if (cfg.client_workers == 0) /* another client always finds a worker */
+    cfg.client_workers = cfg.workers > 1 ? cfg.workers - 1 : 1;
   /* Before any thread exists: GSL must not abort, jansson's hash seed is
    * set once, and every thread inherits a mask that blocks the signals the
    * main thread waits for. */
@@ -207,12 +216,16 @@ int main(int argc, char **argv) {
   sigemptyset(&set);
   sigaddset(&set, SIGTERM);
   sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &set, NULL);
   struct srv_daemon *d = srv_start(&cfg);
   if (!d)
     return 1;
   int sig = 0;
-  sigwait(&set, &sig);
+  /* SIGHUP (a terminal closing, a log rotation) does not stop the daemon:
+   * its log is its standard error, which it never reopens */
+  while (sigwait(&set, &sig) == 0 && sig == SIGHUP)
+    fprintf(stderr, "stickslipd: SIGHUP ignored\n");
   fprintf(stderr, "stickslipd: signal %d, draining\n", sig);
   srv_stop(d);
   fprintf(stderr, "stickslipd: stopped\n");

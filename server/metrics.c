@@ -24,7 +24,7 @@ struct srv_metrics {
   size_t n; /* endpoints + "other" */
   ep_metrics *ep;
   atomic_long in_flight;
-  atomic_ulong rejected_busy;
+  atomic_ulong rejected_busy, cancelled, slow;
 };
 
 srv_metrics *srv_metrics_new(void) {
@@ -68,6 +68,12 @@ void srv_metrics_observe(srv_metrics *m, size_t ep, int status,
 void srv_metrics_busy(srv_metrics *m) {
   atomic_fetch_add(&m->rejected_busy, 1);
 }
+
+void srv_metrics_cancelled(srv_metrics *m) {
+  atomic_fetch_add(&m->cancelled, 1);
+}
+
+void srv_metrics_slow(srv_metrics *m) { atomic_fetch_add(&m->slow, 1); }
 
 long srv_metrics_in_flight(srv_metrics *m, int delta) {
   return atomic_fetch_add(&m->in_flight, delta) + delta;
@@ -155,9 +161,18 @@ char *srv_metrics_render(srv_metrics *m) {
       atomic_load(&m->in_flight));
   put(&s,
       "# HELP stickslip_rejected_busy_total Requests answered 503 "
-      "because every compute slot stayed busy.\n"
+      "because their client's queue was full.\n"
       "# TYPE stickslip_rejected_busy_total counter\n"
-      "stickslip_rejected_busy_total %lu\n",
-      atomic_load(&m->rejected_busy));
+      "stickslip_rejected_busy_total %lu\n"
+      "# HELP stickslip_cancelled_total Computations dropped or stopped "
+      "because their client went away.\n"
+      "# TYPE stickslip_cancelled_total counter\n"
+      "stickslip_cancelled_total %lu\n"
+      "# HELP stickslip_slow_closed_total Connections closed because they "
+      "did not deliver a request within --request-timeout.\n"
+      "# TYPE stickslip_slow_closed_total counter\n"
+      "stickslip_slow_closed_total %lu\n",
+      atomic_load(&m->rejected_busy), atomic_load(&m->cancelled),
+      atomic_load(&m->slow));
   return s.p;
 }

@@ -11,17 +11,71 @@
 
 /** Everything a flag or an environment variable can set. */
 typedef struct srv_config {
-  char bind[64];        /**< --bind, STICKSLIP_BIND (127.0.0.1) */
-  int port;             /**< --port, STICKSLIP_PORT (8080; 0: any free) */
-  api_limits lim;       /**< per-request limits */
-  unsigned max_conn;    /**< --max-connections (256) */
-  unsigned per_ip;      /**< --per-ip-connections (64) */
-  unsigned timeout;     /**< --connection-timeout seconds (10) */
-  unsigned workers;     /**< --workers: computations at once (cores) */
-  double queue_timeout; /**< --queue-timeout seconds (2) */
-  double drain;         /**< --drain seconds at shutdown (8) */
-  int quiet;            /**< --quiet: no access log */
+  char bind[64];           /**< --bind, STICKSLIP_BIND (127.0.0.1) */
+  int port;                /**< --port, STICKSLIP_PORT (8080; 0: any free) */
+  api_limits lim;          /**< per-request limits */
+  unsigned max_conn;       /**< --max-connections (2048) */
+  unsigned per_ip;         /**< --per-ip-connections (1024) */
+  unsigned timeout;        /**< --connection-timeout seconds (10) */
+  unsigned workers;        /**< --workers: computations at once (cores) */
+  unsigned client_workers; /**< --client-workers: of one client (workers-1) */
+  unsigned client_queue;   /**< --client-queue: waiting, per client (64) */
+  double request_timeout;  /**< --request-timeout: headers and body (10) */
+  double drain;            /**< --drain seconds at shutdown (15) */
+  int quiet;               /**< --quiet: no access log */
 } srv_config;
+
+/* ---- the compute pool (pool.c) ----------------------------------------- */
+
+#define SRV_CLIENT_KEY 64 /* a client's key: its address as text */
+
+enum {
+  SRV_JOB_WAITING = 1,
+  SRV_JOB_RUNNING,
+  SRV_JOB_DONE,      /* ran to its end */
+  SRV_JOB_CANCELLED, /* its client went away: dropped, or stopped */
+  SRV_JOB_REFUSED    /* still waiting when the daemon shut down */
+};
+
+/* A unit of work, embedded in the request it computes. */
+typedef struct srv_job {
+  atomic_int cancel;    /* set when the client is gone; the core polls it */
+  int state;            /* SRV_JOB_*, under the pool's lock */
+  struct srv_job *next; /* in its client's queue */
+  struct srv_job *all_prev, *all_next; /* waiting or running */
+  void *owner;                         /* its client */
+} srv_job;
+
+typedef struct srv_pool_cfg {
+  unsigned workers;             /* threads */
+  unsigned client_workers;      /* jobs of one client running at once */
+  unsigned client_queue;        /* jobs of one client waiting */
+  void (*on_queued)(srv_job *); /* under the lock, before any worker sees it */
+  void (*run)(srv_job *);       /* on a worker */
+  void (*done)(srv_job *);      /* after it ran, or was dropped; no lock held */
+} srv_pool_cfg;
+
+typedef struct srv_pool srv_pool;
+
+enum { SRV_POOL_FULL = 1, SRV_POOL_CLOSED = 2, SRV_POOL_NOMEM = 3 };
+
+srv_pool *srv_pool_new(const srv_pool_cfg *cfg); /* NULL on failure */
+/* Queue @a j for the client @a key: 0, or SRV_POOL_FULL (that client's
+ * queue is full), SRV_POOL_CLOSED, SRV_POOL_NOMEM. */
+int srv_pool_submit(srv_pool *p, srv_job *j, const char *key);
+/* Flag the running jobs whose client @a gone says is gone, and drop the
+ * waiting ones (done() with SRV_JOB_CANCELLED). */
+void srv_pool_watch(srv_pool *p, int (*gone)(srv_job *));
+/* Drop every waiting job (done() with SRV_JOB_REFUSED). */
+void srv_pool_drain(srv_pool *p);
+/* Flag every job to stop. */
+void srv_pool_cancel_all(srv_pool *p);
+/* Wait until no job waits or runs, at most @a seconds: 1 if idle. */
+int srv_pool_wait_idle(srv_pool *p, double seconds);
+/* Stop the workers (after the jobs they run) and free the pool. */
+void srv_pool_free(srv_pool *p);
+
+/* ---- metrics (metrics.c) ------------------------------------------------ */
 
 #define SRV_BUCKETS 12
 
@@ -36,7 +90,9 @@ srv_metrics *srv_metrics_new(void); /* NULL when out of memory */
 void srv_metrics_free(srv_metrics *m);
 /* @a ep: an endpoint index, or anything out of range for "other". */
 void srv_metrics_observe(srv_metrics *m, size_t ep, int status, double seconds);
-void srv_metrics_busy(srv_metrics *m); /* a 503 for a busy slot */
+void srv_metrics_busy(srv_metrics *m);      /* a 503 for a full queue */
+void srv_metrics_cancelled(srv_metrics *m); /* work of a client gone away */
+void srv_metrics_slow(srv_metrics *m);      /* a connection past its deadline */
 long srv_metrics_in_flight(srv_metrics *m, int delta);
 char *srv_metrics_render(srv_metrics *m); /* malloc'd */
 
