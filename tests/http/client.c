@@ -39,6 +39,11 @@ static void header(const char *raw, const char *name, char *out, size_t n) {
   }
 }
 
+/* The source address of this thread's connections (NULL: any). */
+static _Thread_local const char *source;
+
+void http_set_source(const char *addr) { source = addr; }
+
 int http_connect(int port) {
   struct sockaddr_in a;
   int fd = socket(AF_INET, SOCK_STREAM, 0);
@@ -46,6 +51,13 @@ int http_connect(int port) {
     return -1;
   memset(&a, 0, sizeof a);
   a.sin_family = AF_INET;
+  if (source) {
+    if (inet_pton(AF_INET, source, &a.sin_addr) != 1 ||
+        bind(fd, (struct sockaddr *)&a, sizeof a) != 0) {
+      close(fd);
+      return -1;
+    }
+  }
   a.sin_port = htons((uint16_t)port);
   a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   if (connect(fd, (struct sockaddr *)&a, sizeof a) != 0) {
@@ -55,8 +67,7 @@ int http_connect(int port) {
   return fd;
 }
 
-int http_raw(int port, const char *req, size_t len, http_resp *r) {
-  memset(r, 0, sizeof *r);
+int http_send(int port, const char *req, size_t len) {
   int fd = http_connect(port);
   if (fd < 0)
     return -1;
@@ -67,11 +78,16 @@ int http_raw(int port, const char *req, size_t len, http_resp *r) {
       break;
     off += (size_t)k;
   }
+  return fd;
+}
+
+int http_read(int fd, int timeout_ms, http_resp *r) {
+  memset(r, 0, sizeof *r);
   size_t cap = 65536, n = 0;
   char *buf = malloc(cap);
   for (;;) {
     struct pollfd p = {fd, POLLIN, 0};
-    if (poll(&p, 1, 60000) <= 0)
+    if (poll(&p, 1, timeout_ms) <= 0)
       break;
     if (n + 4096 > cap) {
       cap *= 2;
@@ -96,8 +112,17 @@ int http_raw(int port, const char *req, size_t len, http_resp *r) {
   return 0;
 }
 
-int http_do(int port, const char *method, const char *path, const char *ctype,
-            const char *body, http_resp *r) {
+int http_raw(int port, const char *req, size_t len, http_resp *r) {
+  memset(r, 0, sizeof *r);
+  int fd = http_send(port, req, len);
+  if (fd < 0)
+    return -1;
+  return http_read(fd, 60000, r);
+}
+
+/* The text of a request with Connection: close (malloc'd). */
+char *http_request(const char *method, const char *path, const char *ctype,
+                   const char *body, size_t *len) {
   size_t bl = body ? strlen(body) : 0;
   size_t cap = bl + 512;
   char *req = malloc(cap);
@@ -111,7 +136,15 @@ int http_do(int port, const char *method, const char *path, const char *ctype,
   h += snprintf(req + h, cap - (size_t)h, "\r\n");
   if (body)
     memcpy(req + h, body, bl);
-  int rc = http_raw(port, req, (size_t)h + bl, r);
+  *len = (size_t)h + bl;
+  return req;
+}
+
+int http_do(int port, const char *method, const char *path, const char *ctype,
+            const char *body, http_resp *r) {
+  size_t len;
+  char *req = http_request(method, path, ctype, body, &len);
+  int rc = http_raw(port, req, len, r);
   free(req);
   return rc;
 }

@@ -18,8 +18,20 @@ typedef struct http_resp {
   char allow[32];
 } http_resp;
 
+/* The source address of the calling thread's connections, e.g.
+ * "127.0.0.2" (the daemon tells clients apart by address); NULL: any. */
+void http_set_source(const char *addr);
 /* A connected socket to 127.0.0.1:port, or -1. */
 int http_connect(int port);
+/* Connect and send @a req; the socket (to read the answer from), or -1. */
+int http_send(int port, const char *req, size_t len);
+/* Read an answer until the server closes or @a timeout_ms passes without a
+ * byte; closes @a fd.  0 when a response was read. */
+int http_read(int fd, int timeout_ms, http_resp *r);
+/* The text of a request with Connection: close (malloc'd), its length in
+ * *len. */
+char *http_request(const char *method, const char *path, const char *ctype,
+                   const char *body, size_t *len);
 /* Send @a req (len bytes) to 127.0.0.1:port, read to EOF.  0 on success. */
 int http_raw(int port, const char *req, size_t len, http_resp *r);
 /* A request with Connection: close. method, path, content type (or NULL),

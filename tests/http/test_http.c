@@ -9,6 +9,7 @@
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <sys/wait.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
@@ -306,22 +307,26 @@ static void test_bad_input(void) {
   expect_problem_raw("overflowing Content-Length", big, strlen(big), 413, 1);
 }
 
-/* A long computation for the concurrency tests: many events, no list. */
-static const char *LONG_SIM =
-    "{" PAPER ",\"initial\":" X0 ",\"t_end\":9e6,\"events\":false}";
-
-typedef struct job {
-  int port, status;
-} job;
-
-static void *run_long(void *vp) {
-  job *j = vp;
-  http_resp r;
-  if (http_do(j->port, "POST", "/simulate", JSON, LONG_SIM, &r) == 0)
-    j->status = r.status;
-  http_free(&r);
-  return NULL;
+/* Has the server closed this connection?  Waits up to ms. */
+static int closed_by_server(int fd, int ms) {
+  struct pollfd p = {fd, POLLIN, 0};
+  char c;
+  if (poll(&p, 1, ms) <= 0)
+    return 0;
+  return recv(fd, &c, 1, 0) == 0;
 }
+
+/* Computations for the pool tests: LONG needs minutes (it ends only by
+ * cancellation or shutdown), MEDIUM about a second, CHEAP microseconds. */
+static const char *LONG_SIM =
+    "{" PAPER ",\"initial\":" X0 ",\"t_end\":9e8,\"events\":false}";
+static const char *MEDIUM_SIM =
+    "{" PAPER ",\"initial\":" X0 ",\"t_end\":6e6,\"events\":false}";
+static const char *CHEAP =
+    "{" PAPER ",\"phases\":[{\"mode\":\"slip\",\"duration\":4.497497290813434},"
+    "{\"mode\":\"overshoot\",\"duration\":2.7226655903272814},{\"mode\":"
+    "\"stick\",\"duration\":3.05126697421287}],\"z0\":[1.1834277342427062,"
+    "3.910427734242709,-0.8074871367243069,1.0]}";
 
 static double mono(void) {
   struct timespec ts;
@@ -329,85 +334,287 @@ static double mono(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* EVIDENCE: README "Limits": a /health while eight long /simulate run, and
- * admission control with 503 + Retry-After */
-static void test_concurrency(void) {
+/* Send a POST and return the socket to read the answer from. */
+static int start(int port, const char *path, const char *body) {
+  size_t len;
+  char *req = http_request("POST", path, JSON, body, &len);
+  int fd = http_send(port, req, len);
+  free(req);
+  return fd;
+}
+
+/* A counter of the daemon's /metrics, or -1. */
+static double metric(int port, const char *name) {
+  http_resp r;
+  double v = -1;
+  if (http_do(port, "GET", "/metrics", NULL, NULL, &r) == 0) {
+    char line[96];
+    snprintf(line, sizeof line, "\n%s ", name);
+    const char *at = strstr(r.body, line);
+    if (at)
+      v = atof(at + strlen(line));
+  }
+  http_free(&r);
+  return v;
+}
+
+/* CPU seconds the process has used (utime + stime from /proc). */
+static double cpu_seconds(pid_t pid) {
+  char path[64], buf[1024];
+  snprintf(path, sizeof path, "/proc/%d/stat", (int)pid);
+  FILE *f = fopen(path, "r");
+  if (!f)
+    return -1;
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  fclose(f);
+  buf[n] = 0;
+  char *p = strrchr(buf, ')');
+  unsigned long ut = 0, st = 0;
+  /* after the command: state ppid pgrp session tty tpgid flags minflt
+   * cminflt majflt cmajflt utime stime */
+  if (!p || sscanf(p + 2, "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %lu %lu",
+                   &ut, &st) != 2)
+    return -1;
+  return (double)(ut + st) / (double)sysconf(_SC_CLK_TCK);
+}
+
+/* The latency of a cheap computation from @a src, and its status. */
+typedef struct probe {
+  int port, status;
+  const char *src;
+  double seconds;
+} probe;
+
+static void *cheap_probe(void *vp) {
+  probe *p = vp;
+  http_resp r;
+  http_set_source(p->src);
+  double t0 = mono();
+  p->status = http_do(p->port, "POST", "/stability", JSON, CHEAP, &r) == 0
+                  ? r.status
+                  : -1;
+  p->seconds = mono() - t0;
+  http_free(&r);
+  return NULL;
+}
+
+/* EVIDENCE: README "Limits": per-client queues served round robin, a full
+ * queue answered 503 at once, another client's cheap work not kept waiting
+ * by a client's long work, and a client that hangs up stops its work */
+static void test_pool(void) {
   daemon_proc d;
   const char *args[] = {"--workers",
                         "2",
-                        "--queue-timeout",
-                        "0.3",
+                        "--client-workers",
+                        "1",
+                        "--client-queue",
+                        "2",
                         "--max-events",
-                        "100000000",
+                        "1000000000",
                         "--max-horizon",
-                        "1e8",
+                        "1e10",
                         "--max-seconds",
-                        "60",
+                        "600",
                         "--drain",
                         "60",
                         NULL};
   ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
-  pthread_t th[8];
-  job jobs[8];
-  for (int i = 0; i < 8; i++) {
-    jobs[i].port = d.port;
-    jobs[i].status = 0;
-    pthread_create(&th[i], NULL, run_long, &jobs[i]);
+  /* client A (127.0.0.1): one long computation runs, two wait, three are
+   * refused at once */
+  int fd[6];
+  for (int i = 0; i < 6; i++) {
+    fd[i] = start(d.port, "/simulate", LONG_SIM);
+    usleep(20000);
   }
   usleep(200000);
+  int refused = 0, pending = 0;
+  for (int i = 0; i < 6; i++) {
+    struct pollfd p = {fd[i], POLLIN, 0};
+    if (poll(&p, 1, 0) > 0) {
+      http_resp r;
+      ASSERT_EQ_INT(http_read(fd[i], 2000, &r), 0);
+      ASSERT_EQ_INT(r.status, 503);
+      ASSERT_TRUE(strcmp(r.retry_after, "1") == 0);
+      http_free(&r);
+      fd[i] = -1;
+      refused++;
+    } else {
+      pending++;
+    }
+  }
+  printf("pool: 6 long requests from one client: %d waiting or running, %d "
+         "refused at once\n",
+         pending, refused);
+  ASSERT_EQ_INT(refused, 3);
+  /* a /health meanwhile, from A itself */
   http_resp r;
   double t0 = mono();
   ASSERT_EQ_INT(http_do(d.port, "GET", "/health", NULL, NULL, &r), 0);
   double dt = mono() - t0;
   ASSERT_EQ_INT(r.status, 200);
   json_t *h = json_loads(r.body, 0, NULL);
-  /* the long requests are still in flight while /health is answered */
   long inflight = (long)num(h, "/in_flight");
   json_decref(h);
   http_free(&r);
-  printf("concurrency: /health answered in %.2f ms with %ld requests in "
-         "flight\n",
-         dt * 1e3, inflight);
+  printf("pool: /health in %.2f ms with %ld requests in flight\n", dt * 1e3,
+         inflight);
   ASSERT_TRUE(inflight >= 3);
-  int ok = 0, busy = 0;
-  for (int i = 0; i < 8; i++) {
-    pthread_join(th[i], NULL);
-    ok += jobs[i].status == 200;
-    busy += jobs[i].status == 503;
+  /* client B (127.0.0.2): cheap computations are not kept waiting */
+  double worst = 0;
+  for (int i = 0; i < 20; i++) {
+    probe pb = {d.port, 0, "127.0.0.2", 0};
+    cheap_probe(&pb);
+    ASSERT_EQ_INT(pb.status, 200);
+    worst = fmax(worst, pb.seconds);
   }
-  printf("concurrency: 8 long requests: %d answered 200, %d answered 503\n", ok,
-         busy);
-  ASSERT_EQ_INT(ok + busy, 8);
-  ASSERT_TRUE(ok >= 2 && busy >= 1);
-  /* 503 carries Retry-After */
-  {
-    job j2[3];
-    pthread_t t2[3];
-    for (int i = 0; i < 2; i++) {
-      j2[i].port = d.port;
-      pthread_create(&t2[i], NULL, run_long, &j2[i]);
-    }
-    usleep(200000);
-    ASSERT_EQ_INT(http_do(d.port, "POST", "/simulate", JSON, LONG_SIM, &r), 0);
-    ASSERT_EQ_INT(r.status, 503);
-    ASSERT_TRUE(strcmp(r.retry_after, "1") == 0);
-    http_free(&r);
-    for (int i = 0; i < 2; i++)
-      pthread_join(t2[i], NULL);
-  }
-  /* EVIDENCE: README "Limits": SIGTERM finishes the requests in flight, exits 0
-   */
-  job last = {d.port, 0};
-  pthread_t tl;
-  pthread_create(&tl, NULL, run_long, &last);
-  usleep(200000);
-  int code = daemon_stop(&d);
-  pthread_join(tl, NULL);
-  ASSERT_EQ_INT(code, 0);
-  ASSERT_EQ_INT(last.status, 200);
+  printf("pool: 20 cheap /stability from another client while the first "
+         "keeps its long work in flight: slowest %.2f ms\n",
+         worst * 1e3);
+  ASSERT_TRUE(worst < 1.0);
+  /* A hangs up: its waiting work is dropped, its running work stops */
+  double cpu0 = cpu_seconds(d.pid);
+  t0 = mono();
+  for (int i = 0; i < 6; i++)
+    if (fd[i] >= 0)
+      close(fd[i]);
+  double cancelled = 0;
+  while (mono() - t0 < 5 &&
+         (cancelled = metric(d.port, "stickslip_cancelled_total")) < 3)
+    usleep(10000);
+  double t_stop = mono() - t0;
+  usleep(300000);
+  double cpu1 = cpu_seconds(d.pid);
+  usleep(500000);
+  double cpu2 = cpu_seconds(d.pid);
+  printf("pool: after the hang-up, 3 computations cancelled in %.0f ms; "
+         "then %.3f CPU-s in 0.5 s\n",
+         t_stop * 1e3, cpu2 - cpu1);
+  ASSERT_TRUE(cancelled == 3);
+  ASSERT_TRUE(cpu2 - cpu1 < 0.1);
+  (void)cpu0;
+  /* A's slot is free again at once */
+  probe pa = {d.port, 0, "127.0.0.1", 0};
+  cheap_probe(&pa);
+  ASSERT_EQ_INT(pa.status, 200);
+  ASSERT_TRUE(pa.seconds < 1.0);
+  ASSERT_EQ_INT(daemon_stop(&d), 0);
   char *log = daemon_log(&d);
   ASSERT_TRUE(log && strstr(log, "GET /health 200 "));
   free(log);
+  unlink(d.log_path);
+}
+
+/* EVIDENCE: README "Limits": SIGTERM refuses new connections, finishes the
+ * work in flight, answers what waits with 503 and exits 0; SIGHUP does not
+ * stop the daemon */
+static void test_shutdown(void) {
+  daemon_proc d;
+  const char *args[] = {"--workers",
+                        "1",
+                        "--client-queue",
+                        "4",
+                        "--max-events",
+                        "100000000",
+                        "--max-horizon",
+                        "1e8",
+                        "--max-seconds",
+                        "600",
+                        "--drain",
+                        "60",
+                        NULL};
+  ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
+  kill(d.pid, SIGHUP);
+  usleep(100000);
+  http_resp r;
+  ASSERT_EQ_INT(http_do(d.port, "GET", "/health", NULL, NULL, &r), 0);
+  ASSERT_EQ_INT(r.status, 200);
+  http_free(&r);
+  int running = start(d.port, "/simulate", MEDIUM_SIM);
+  usleep(50000);
+  int waiting = start(d.port, "/simulate", MEDIUM_SIM);
+  usleep(100000);
+  kill(d.pid, SIGTERM);
+  usleep(100000);
+  int late = http_connect(d.port);
+  ASSERT_TRUE(late < 0); /* refused: the listening socket is closed */
+  if (late >= 0)
+    close(late);
+  http_resp a, b;
+  ASSERT_EQ_INT(http_read(running, 60000, &a), 0);
+  ASSERT_EQ_INT(http_read(waiting, 60000, &b), 0);
+  printf("shutdown: running request %d, waiting request %d\n", a.status,
+         b.status);
+  ASSERT_EQ_INT(a.status, 200);
+  ASSERT_EQ_INT(b.status, 503);
+  ASSERT_TRUE(strstr(b.body, "shutting-down") != NULL);
+  http_free(&a);
+  http_free(&b);
+  int st = 0;
+  waitpid(d.pid, &st, 0);
+  ASSERT_TRUE(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+  char *log = daemon_log(&d);
+  ASSERT_TRUE(log && strstr(log, "SIGHUP ignored"));
+  free(log);
+  unlink(d.log_path);
+}
+
+/* EVIDENCE: README "Errors": framing that could smuggle a request is
+ * refused with 400 and the connection closed; a GET with a body is
+ * answered */
+static void test_framing(void) {
+  static const char *bad[] = {
+      "POST /orbit HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+      "Content-Length: 2\r\nContent-Length: 60\r\n\r\n{}",
+      "POST /orbit HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+      "Content-Length: 7\r\nTransfer-Encoding: chunked\r\n\r\n2\r\n{}\r\n0"
+      "\r\n\r\n",
+      "GET /health HTTP/1.1\r\nHost: x\r\nHost: y\r\n\r\n",
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+    expect_problem_raw("smuggling framing", bad[i], strlen(bad[i]), 400, 0);
+  const char *get_body =
+      "GET /health HTTP/1.1\r\nHost: x\r\nConnection: close\r\n"
+      "Content-Length: 5\r\n\r\nhello";
+  http_resp r;
+  ASSERT_EQ_INT(http_raw(PORT, get_body, strlen(get_body), &r), 0);
+  ASSERT_EQ_INT(r.status, 200);
+  http_free(&r);
+}
+
+/* EVIDENCE: README "Limits": a connection that does not deliver its
+ * request within --request-timeout is closed, while others are served */
+static void test_slow_client(void) {
+  daemon_proc d;
+  const char *args[] = {"--request-timeout", "1", NULL};
+  ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
+  int slow[20];
+  for (int i = 0; i < 20; i++) {
+    slow[i] = http_connect(d.port);
+    ASSERT_TRUE(slow[i] >= 0 && send(slow[i], "GET /hea", 8, 0) == 8);
+  }
+  double t0 = mono();
+  http_resp r;
+  ASSERT_EQ_INT(http_do(d.port, "GET", "/health", NULL, NULL, &r), 0);
+  double dt = mono() - t0;
+  ASSERT_EQ_INT(r.status, 200);
+  http_free(&r);
+  for (int i = 0; i < 20; i++) {
+    /* a byte now and then does not keep it open past the deadline */
+    ASSERT_TRUE(send(slow[i], "l", 1, MSG_NOSIGNAL) == 1);
+  }
+  ASSERT_TRUE(!closed_by_server(slow[0], 500));
+  int closed = 0;
+  for (int i = 0; i < 20; i++) {
+    closed += closed_by_server(slow[i], 3000);
+    close(slow[i]);
+  }
+  double total = mono() - t0;
+  printf("slow clients: /health in %.2f ms beside 20 slow connections, all "
+         "%d closed after %.2f s (deadline 1 s)\n",
+         dt * 1e3, closed, total);
+  ASSERT_EQ_INT(closed, 20);
+  ASSERT_TRUE(metric(d.port, "stickslip_slow_closed_total") >= 20);
+  ASSERT_EQ_INT(daemon_stop(&d), 0);
   unlink(d.log_path);
 }
 
@@ -525,15 +732,6 @@ static void test_spec_examples(void) {
   printf("spec: %d examples replayed\n", replayed);
   ASSERT_TRUE(replayed >= 8);
   json_decref(spec);
-}
-
-/* Has the server closed this connection?  Waits up to ms. */
-static int closed_by_server(int fd, int ms) {
-  struct pollfd p = {fd, POLLIN, 0};
-  char c;
-  if (poll(&p, 1, ms) <= 0)
-    return 0;
-  return recv(fd, &c, 1, 0) == 0;
 }
 
 /* EVIDENCE: README "Limits": per-IP connection limit and idle timeout */
@@ -672,11 +870,14 @@ int main(int argc, char **argv) {
   test_endpoints();
   test_spec_examples();
   test_bad_input();
+  test_framing();
   ASSERT_EQ_INT(daemon_stop(&d), 0);
   unlink(d.log_path);
   test_flag_limits();
   test_time_limit();
   test_connection_limits();
-  test_concurrency();
+  test_pool();
+  test_shutdown();
+  test_slow_client();
   TEST_DONE();
 }
