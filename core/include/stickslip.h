@@ -27,14 +27,20 @@
  * SS_STATUS_MAP: zero is success, a positive value is information the caller
  * must read (for example SS_GRAZING), a negative value is a failure.  Details
  * go to an optional caller-owned ss_diag; pass NULL when they are not wanted.
- * The library never prints, exits or aborts.  GSL's default error handler
- * aborts, and GSL has one handler per process: the first ss_model_init()
- * (every computation starts from a model) turns it off, unless the program
- * installed a handler of its own before, which is then left in place (see
- * ss_gsl_quiet()).
+ * The library never prints, exits or aborts.  It calls GSL, whose default
+ * error handler prints and aborts, and GSL has one handler per process: the
+ * first ss_model_init() in the process (every computation starts from a
+ * model) therefore turns that handler off, unless the program installed a
+ * handler of its own before, which is then left in place and is called for
+ * GSL's errors, the library's included.  Once off, GSL's handler stays off
+ * for the whole process, for the program's own GSL calls too.  See
+ * ss_gsl_quiet().
  *
- * Thread safety.  Every function is reentrant: it touches only its arguments.
- * Objects may be shared read-only between threads.
+ * Thread safety.  Every function is reentrant: it touches only its arguments
+ * (the one exception is GSL's process-wide handler, set once under
+ * pthread_once by the first ss_model_init() or ss_gsl_quiet()).  Objects
+ * may be shared read-only between threads; an ss_sim that is advanced
+ * belongs to one thread at a time.
  */
 #ifndef STICKSLIP_H
 #define STICKSLIP_H
@@ -45,6 +51,8 @@
 extern "C" {
 #endif
 
+/* SS_API marks what the shared library exports; everything else in it is
+ * hidden. */
 #if defined(STICKSLIP_BUILDING) && defined(__GNUC__)
 #define SS_API __attribute__((visibility("default")))
 #else
@@ -101,9 +109,11 @@ enum {
 #undef SS_STATUS_ENUM
 };
 
-/** The message of a status code ("unknown status" for anything else). */
+/** The message of a status code ("unknown status" for anything else).
+ *  @return a static string, never NULL. */
 SS_API const char *ss_strerror(int status);
-/** The name of a status code without its prefix, e.g. "GRAZING". */
+/** The name of a status code without its prefix, e.g. "GRAZING"
+ *  ("UNKNOWN" for anything else).  @return a static string, never NULL. */
 SS_API const char *ss_status_name(int status);
 
 /**
@@ -121,9 +131,13 @@ typedef struct ss_diag {
 SS_API void ss_diag_clear(ss_diag *d);
 
 /**
- * Turn GSL's default abort-on-error handler off, once per process, unless
- * the program installed a handler of its own before (GSL has one handler
- * per process).  ss_model_init() calls it; a program may call it earlier.
+ * Turn GSL's default abort-on-error handler off, once per process: the
+ * first call (from here or from ss_model_init(), which every computation
+ * starts with) calls gsl_set_error_handler_off(), and if the handler it
+ * replaced was one the program had installed (not GSL's default), puts that
+ * one back with gsl_set_error_handler().  Later calls do nothing, so a
+ * handler the program installs afterwards is never touched.  A program may
+ * call it early, for example before starting threads; it need not.
  * Thread-safe (pthread_once).
  */
 SS_API void ss_gsl_quiet(void);
@@ -151,7 +165,9 @@ typedef struct ss_physical {
 
 /**
  * Check @a p: every value finite, 0 < chi < 1, eta > 0, 0 < us < ur, V > 0.
- * @return SS_OK or SS_EDOMAIN, with the parameter named in @a d->where.
+ * @param d  details of a failure, may be NULL
+ * @return SS_OK; SS_EDOMAIN, with the parameter named in @a d->where and
+ *         the reason in @a d->text; SS_EINVAL (@a p NULL).
  */
 SS_API int ss_params_check(const ss_params *p, ss_diag *d);
 
@@ -161,9 +177,12 @@ SS_API int ss_params_check(const ss_params *p, ss_diag *d);
  * us = Fs/(k1+k2), ur = Fr/(k1+k2), V = v0/omega.
  * Dimensionless time is t = omega * (physical time); displacements keep their
  * unit; a velocity v in the model is v*omega in physical units.
+ * @param ph         the physical parameters
  * @param[out] p      the dimensionless parameters, checked
  * @param[out] omega  the time scale (1/s when the inputs are SI), may be NULL
- * @return SS_OK or SS_EDOMAIN (naming the physical field).
+ * @param d           details of a failure, may be NULL
+ * @return SS_OK; SS_EDOMAIN (naming the physical field in @a d->where);
+ *         SS_EINVAL (@a ph NULL).
  */
 SS_API int ss_params_from_physical(const ss_physical *ph, ss_params *p,
                                    double *omega, ss_diag *d);
@@ -202,7 +221,7 @@ SS_API const char *ss_mode_name(ss_mode m);
  * inverse, and d0.  Caller-allocated; fill it with ss_model_init().
  */
 typedef struct ss_model {
-  ss_params p;
+  ss_params p;         /**< the parameters, as checked */
   double lam[2];       /**< eigenvalues of K, ascending */
   double w[2];         /**< modal frequencies sqrt(lam) */
   double phi[2][2];    /**< z = phi q: column k is the k-th mode shape */
@@ -211,8 +230,13 @@ typedef struct ss_model {
 } ss_model;
 
 /**
- * Check @a p and derive the modal data.
- * @return SS_OK or SS_EDOMAIN.  Thread-safe; allocates nothing.
+ * Check @a p and derive the modal data.  The first call in the process
+ * also runs ss_gsl_quiet().
+ * @param[out] m  the model, filled on success
+ * @param p       the parameters (ss_params_check())
+ * @param d       details of a failure, may be NULL
+ * @return SS_OK; SS_EDOMAIN (also for parameters too extreme together for
+ *         doubles); SS_EINVAL (@a p NULL).  Thread-safe; allocates nothing.
  */
 SS_API int ss_model_init(ss_model *m, const ss_params *p, ss_diag *d);
 
@@ -259,7 +283,7 @@ SS_API void ss_transition(const ss_model *m, ss_mode mode, double t,
                           double A[16], double c[4], double dA[16],
                           double dc[4]);
 
-/** z = x - (d0, 0).  @a x and @a z may alias. */
+/** The paper's coordinates z = x - (d0, 0).  @a x and @a z may alias. */
 SS_API void ss_x_to_z(const ss_model *m, const double x[4], double z[4]);
 /** x = z + (d0, 0).  @a x and @a z may alias. */
 SS_API void ss_z_to_x(const ss_model *m, const double z[4], double x[4]);
@@ -268,6 +292,7 @@ SS_API void ss_z_to_x(const ss_model *m, const double z[4], double x[4]);
 /* Certified event location                                                  */
 /* ------------------------------------------------------------------------ */
 
+/** The most sinusoidal terms an ss_trig holds. */
 #define SS_TRIG_MAX 3
 
 /**
@@ -280,12 +305,15 @@ SS_API void ss_z_to_x(const ss_model *m, const double z[4], double x[4]);
  * chi (x2 - x1) -+ ur in stick (a line plus one term).
  */
 typedef struct ss_trig {
-  double c0, c1;
-  int n;
-  double a[SS_TRIG_MAX], b[SS_TRIG_MAX], w[SS_TRIG_MAX];
+  double c0, c1;         /**< the line c0 + c1 t */
+  int n;                 /**< number of sinusoidal terms, 0..SS_TRIG_MAX */
+  double a[SS_TRIG_MAX]; /**< cosine amplitudes */
+  double b[SS_TRIG_MAX]; /**< sine amplitudes */
+  double w[SS_TRIG_MAX]; /**< angular frequencies, > 0 */
 } ss_trig;
 
-/** g(t) and its first @a order derivatives into out[0..order], order <= 3. */
+/** g(t) and its first @a order derivatives into out[0..order], 0 <= order
+ *  <= 3.  Thread-safe; allocates nothing. */
 SS_API void ss_trig_eval(const ss_trig *g, double t, int order, double *out);
 
 /**
@@ -335,10 +363,10 @@ typedef enum ss_event_kind {
 
 /** One event: the switching time, the modes before and after, the state. */
 typedef struct ss_event {
-  double t;         /**< absolute time of the event */
-  ss_mode from, to; /**< from == to for a grazing that changes nothing */
-  ss_event_kind kind;
-  double x[4]; /**< state at the event */
+  double t;           /**< absolute time of the event */
+  ss_mode from, to;   /**< from == to for a grazing that changes nothing */
+  ss_event_kind kind; /**< a mode change or a tangency */
+  double x[4];        /**< state at the event */
 } ss_event;
 
 /**
@@ -346,15 +374,22 @@ typedef struct ss_event {
  * at every event, so within a phase it is the closed form from the last
  * event: a long run keeps machine precision.  Absolute time is kept as an
  * unevaluated sum of two doubles, so that event times stay accurate after
- * 10^6 events.  The model must outlive it.
+ * 10^6 events.  The model must outlive it.  Its functions change it (all
+ * but ss_sim_mode(), ss_sim_time() and ss_sim_state_at()), so a simulation
+ * belongs to one thread at a time.
  */
 typedef struct ss_sim ss_sim;
 
 /**
  * Start a simulation at absolute time @a t0 from @a x0; the mode follows
  * ss_mode_of_state().
+ * @param m   the model; it must outlive the simulation
+ * @param t0  the start time, finite
+ * @param x0  the start state, four finite numbers
+ * @param d   details of a failure, may be NULL
  * @return the simulation (release with ss_sim_free()), or NULL with the
- *         reason in @a d: SS_EINVAL (non-finite input) or SS_ENOMEM.
+ *         reason in @a d: SS_EINVAL (a NULL or non-finite input) or
+ *         SS_ENOMEM.
  */
 SS_API ss_sim *ss_sim_new(const ss_model *m, double t0, const double x0[4],
                           ss_diag *d);
@@ -362,7 +397,9 @@ SS_API ss_sim *ss_sim_new(const ss_model *m, double t0, const double x0[4],
 /**
  * Start in a given @a mode (for example stick at the threshold).  The state
  * must be consistent with it: x2' = V for stick (forced exactly), x2' <= V
- * for slip, x2' >= V for overshoot.  NULL on error, as ss_sim_new().
+ * for slip, x2' >= V for overshoot (to 4 ulp of V).
+ * @return the simulation, or NULL as ss_sim_new(); a state inconsistent with
+ *         @a mode, or an unknown mode, is SS_EINVAL.
  */
 SS_API ss_sim *ss_sim_new_mode(const ss_model *m, double t0, const double x0[4],
                                ss_mode mode, ss_diag *d);
@@ -370,7 +407,7 @@ SS_API ss_sim *ss_sim_new_mode(const ss_model *m, double t0, const double x0[4],
 /** Release a simulation.  NULL-safe. */
 SS_API void ss_sim_free(ss_sim *s);
 
-/** The current mode. */
+/** The current mode: the mode the motion is in after the anchor. */
 SS_API ss_mode ss_sim_mode(const ss_sim *s);
 
 /** Current absolute time of the anchor (the last event or the start). */
@@ -379,19 +416,24 @@ SS_API double ss_sim_time(const ss_sim *s);
 /**
  * Advance to the next event if it comes no later than absolute time
  * @a t_stop; fill @a ev and re-anchor there.
+ * @param ev  the event, may be NULL
  * @return SS_OK (an event, in @a ev; ev->kind says whether it is a grazing),
- *         SS_HORIZON (no event up to t_stop: nothing changes),
- *         or a failure.
+ *         SS_HORIZON (no event up to t_stop, or none ever: a perpetual slip;
+ *         nothing changes), or a failure of the event search (SS_EINVAL
+ *         for a state that contradicts its mode).
  */
 SS_API int ss_sim_next_event(ss_sim *s, double t_stop, ss_event *ev);
 
 /**
  * The state at absolute time @a t, which must lie between the anchor and
  * the next event: anchor time + local time, from the closed form.
+ * @param[out] x  the state
  */
 SS_API void ss_sim_state_at(const ss_sim *s, double t, double x[4]);
 
-/** Move the anchor forward to absolute time @a t (no event in between). */
+/** Move the anchor forward to absolute time @a t, which must come before
+ *  the next event (ss_sim_next_event() with t_stop = t said SS_HORIZON);
+ *  a @a t not after the anchor changes nothing. */
 SS_API void ss_sim_advance(ss_sim *s, double t);
 
 /** What a simulation request asks for; zero-initialise, then set. */
@@ -401,12 +443,13 @@ typedef struct ss_sim_opts {
   size_t stop_after; /**< if > 0: stop at the stop_after-th event */
   int record_events; /**< store the events in the result */
   size_t n_samples;  /**< evenly spaced samples over [sample_from, sample_to] */
-  double sample_from, sample_to;
-  const double
-      *sample_times; /**< or explicit times, ascending (n_sample_times) */
-  size_t n_sample_times;
-  size_t max_events;  /**< limit: more events than this is SS_ELIMIT_EVENTS (0:
-                         none) */
+  double sample_from; /**< first sample time, t0 <= sample_from */
+  double sample_to;   /**< last sample time, sample_to <= t_end */
+  /** Or explicit sample times in [t0, t_end], ascending (not both). */
+  const double *sample_times;
+  size_t n_sample_times; /**< how many sample_times */
+  /** Limit: more events than this is SS_ELIMIT_EVENTS (0: none). */
+  size_t max_events;
   size_t max_samples; /**< limit on samples (0: none) */
   double max_seconds; /**< CPU/wall budget in seconds (0: none) */
   /** Polled where the time budget is (every 256 events): a non-zero answer
@@ -418,13 +461,13 @@ typedef struct ss_sim_opts {
 
 /** The result of ss_simulate(); release with ss_sim_result_free(). */
 typedef struct ss_sim_result {
-  double t;         /**< final time */
-  ss_mode mode;     /**< final mode */
-  double x[4];      /**< final state */
-  size_t n_events;  /**< events that happened */
-  size_t n_grazing; /**< of which tangencies */
-  ss_event *events; /**< the events if record_events, else NULL */
-  size_t n_samples;
+  double t;             /**< final time */
+  ss_mode mode;         /**< final mode */
+  double x[4];          /**< final state */
+  size_t n_events;      /**< events that happened */
+  size_t n_grazing;     /**< of which tangencies */
+  ss_event *events;     /**< the events if record_events, else NULL */
+  size_t n_samples;     /**< samples taken (fewer than asked if stopped) */
   double *st;           /**< sample times */
   double *sx;           /**< samples, 4 per time: x1, x2, x1', x2' */
   unsigned char *smode; /**< mode at each sample */
@@ -435,9 +478,14 @@ typedef struct ss_sim_result {
  * Simulate from @a x0 (mode by ss_mode_of_state()) under @a o.
  * Samples cost only when asked for; with no samples and record_events = 0,
  * nothing is allocated.
- * @return SS_OK; or SS_ELIMIT_EVENTS, SS_ELIMIT_SAMPLES, SS_ELIMIT_TIME when a
- *         limit stops the run (the result then holds the state reached, but
- *         the run is not complete); SS_EINVAL; SS_ENOMEM.
+ * @param[out] r  the result; release it with ss_sim_result_free() whatever
+ *                the status
+ * @param d       details of a failure, may be NULL
+ * @return SS_OK; or SS_ELIMIT_EVENTS, SS_ELIMIT_TIME, SS_ECANCELED when a
+ *         limit or the caller stops the run (the result then holds the
+ *         state reached, but the run is not complete); SS_ELIMIT_SAMPLES
+ *         (too many samples asked for); SS_EINVAL; SS_ENOMEM.  Thread-safe
+ *         (the cancel hook aside).
  */
 SS_API int ss_simulate(const ss_model *m, const double x0[4],
                        const ss_sim_opts *o, ss_sim_result *r, ss_diag *d);
@@ -457,17 +505,18 @@ SS_API void ss_sim_result_free(ss_sim_result *r);
  * stick that ends at +ur (back on Sigma0).
  */
 
+/** The most phases an orbit, a guess or a travelled sequence holds. */
 #define SS_MAX_PHASES 16
 
-/** Orbit kinds. */
+/** Orbit kinds; the values are bits of a mask (ss_orbit_opts.kinds). */
 typedef enum ss_orbit_kind {
   SS_ORBIT_OVERSHOOT = 1, /**< slip, overshoot, stick (section 3) */
   SS_ORBIT_STICKSLIP = 2, /**< slip, stick */
   SS_ORBIT_OTHER = 4,     /**< any other sequence, or period k > 1 */
-  SS_ORBIT_ALL = 7
+  SS_ORBIT_ALL = 7        /**< the mask of all three */
 } ss_orbit_kind;
 
-/** "overshoot", "stick-slip", "other". */
+/** "overshoot", "stick-slip", "other"; NULL for anything else. */
 SS_API const char *ss_orbit_kind_name(ss_orbit_kind k);
 
 /** The kind of a phase sequence (OVERSHOOT, STICKSLIP or OTHER). */
@@ -488,8 +537,9 @@ SS_API const char *ss_orbit_source_name(ss_orbit_source s);
 /** Options of ss_stability() and ss_orbit_solve(); zero-initialise for the
  *  defaults (or pass NULL). */
 typedef struct ss_stab_opts {
-  /** Passes through Sigma0 per period; 0: counted from the modes (a stick
-   *  followed by slip, or the last phase).  ss_orbit_solve() always counts. */
+  /** Returns to Sigma0 per period; 0: counted from the modes (a stick
+   *  followed by slip, or the last phase).  ss_orbit_solve() always counts,
+   *  by its orbit check. */
   int turns;
   /** Also the central-difference Jacobian of ss_poincare(), as a
    *  cross-check of the analytic one (ss_stab.jac_fd, .jac_diff). */
@@ -508,47 +558,50 @@ typedef struct ss_stab {
   double jac[2][2];    /**< analytic Jacobian (section 4, derived anew) */
   double jac_fd[2][2]; /**< central differences of the map by simulation */
   double jac_diff;     /**< max |jac - jac_fd|; NAN if jac_fd not computed */
-  double eig_re[2], eig_im[2];
-  double spectral_radius;
+  double eig_re[2]; /**< eigenvalues of jac, real parts, larger modulus first */
+  double eig_im[2]; /**< and imaginary parts */
+  double spectral_radius; /**< the largest |eigenvalue| */
   int stable; /**< spectral radius < 1 (stable in the paper's sense, sec. 4) */
 } ss_stab;
 
 /** A periodic orbit. */
 typedef struct ss_orbit {
-  ss_orbit_kind kind;
-  int n_phases;
-  ss_mode modes[SS_MAX_PHASES];
-  double durations[SS_MAX_PHASES];
-  double period;
+  ss_orbit_kind kind;              /**< the kind of its phase sequence */
+  int n_phases;                    /**< phases per period, 2..SS_MAX_PHASES */
+  ss_mode modes[SS_MAX_PHASES];    /**< the sequence: slip first, stick last */
+  double durations[SS_MAX_PHASES]; /**< the duration of each phase */
+  double period;                   /**< the sum of the durations */
   int n_turns;  /**< passes through Sigma0 per period (period-k: k) */
   double z0[4]; /**< start (stick -> slip point) in z = x - (d0, 0) */
   double x0[4]; /**< the same in x */
   /* Margins of the constraints of section 5, from the certified finder: */
   ss_margin slip_below; /**< slip: min of V - x2' at interior maxima */
   ss_margin over_above; /**< overshoot: min of x2' - V at interior minima */
-  ss_margin
-      stick_upper; /**< stick: min of ur - chi(x2-x1) at interior maxima */
-  ss_margin stick_lower; /**< stick: min of ur + chi(x2-x1) over the phase */
-  ss_margin switching;   /**< at phase ends: how far the mode rule holds,
-                              e.g. -ur - chi(x2-x1) for (3.2) */
-  ss_margin transversal; /**< min slope of the switching function at the
-                              phase ends (0 would be grazing) */
-  ss_margin min_margin;  /**< the smallest of the value margins above */
-  double residual;       /**< max |F| of the orbit equations at the root */
-  double closure;        /**< max |P^k(s) - s| by simulation */
-  ss_stab stab;
+  /** stick: min of ur - chi(x2-x1) at interior maxima */
+  ss_margin stick_upper;
+  ss_margin stick_lower;  /**< stick: min of ur + chi(x2-x1) over the phase */
+  ss_margin switching;    /**< at phase ends: how far the mode rule holds,
+                               e.g. -ur - chi(x2-x1) for (3.2) */
+  ss_margin transversal;  /**< min slope of the switching function at the
+                               phase ends (0 would be grazing) */
+  ss_margin min_margin;   /**< the smallest of the value margins above */
+  double residual;        /**< max |F| of the orbit equations at the root */
+  double closure;         /**< max |P^k(s) - s| by simulation */
+  ss_stab stab;           /**< its stability */
   int iterations;         /**< Newton iterations of the final solve */
   ss_orbit_source source; /**< how the search found it */
 } ss_orbit;
 
 /** Options of ss_orbit_find(); zero-initialise for the defaults. */
 typedef struct ss_orbit_opts {
-  unsigned kinds;                     /**< mask of ss_orbit_kind; 0 means all */
-  int n_guess;                        /**< > 0: start from this guess only */
-  ss_mode guess_modes[SS_MAX_PHASES]; /**< its sequence (default: by kinds) */
-  double guess[SS_MAX_PHASES];        /**< its durations */
-  int max_period; /**< largest k for period-k orbits (default 4) */
-  int effort;     /**< 1 coarse, 2 default, 3 fine search */
+  unsigned kinds; /**< mask of ss_orbit_kind; 0 means all */
+  int n_guess;    /**< > 0: start from this guess only (<= SS_MAX_PHASES) */
+  /** The guess's sequence.  One that does not start with slip and end with
+   *  stick stands for slip, overshoot, stick (3 phases) or slip, stick (2). */
+  ss_mode guess_modes[SS_MAX_PHASES];
+  double guess[SS_MAX_PHASES]; /**< its durations, finite and > 0 */
+  int max_period; /**< largest k for period-k orbits, 1..8 (0: 4) */
+  int effort;     /**< 1 coarse, 2 default (also 0), 3 fine search */
   /** Cross-check every returned orbit's Jacobian by central differences of
    *  the Poincare map (ss_stab_opts.difference_check). */
   int difference_check;
@@ -580,26 +633,49 @@ typedef struct ss_orbit_report {
  * (3.1), which with the phase-end conditions implies it.  The n equations are
  * chi (z2 - z1)(0) = ur - us (3.1) and the end condition of every phase but
  * the last (x2' = V (3.7) for slip and overshoot, chi(x2-x1) = +-ur for a
- * stick).  GSL's hybridsj solver uses the analytic Jacobian, built from the
- * derivatives of the phase transition matrices; two Newton steps polish.
+ * stick); ss_orbit_equations() evaluates them.  GSL's hybridsj solver uses
+ * the analytic Jacobian, built from the derivatives of the phase transition
+ * matrices; plain Newton steps polish while the residual falls.
  *
- * The root is then checked (ss_orbit_check) and its stability computed.
+ * The root is then checked (ss_orbit_check()) and its stability computed
+ * (ss_stability(), with the turns the check counted).
+ * @param n, modes  the phase sequence, 2..SS_MAX_PHASES phases, no mode
+ *                  twice in a row
+ * @param tau       the guessed durations, finite and > 0
+ * @param opts      may be NULL (no difference check); opts->turns is not
+ *                  used
+ * @param[out] o    the orbit
+ * @param d         details of a failure, may be NULL
  * @return SS_OK (a feasible orbit in @a o); SS_INFEASIBLE (a root that is not
  *         an orbit: @a o holds it and @a d->text says why); SS_ENOCONV;
- *         SS_ESINGULAR; SS_EINVAL.
+ *         SS_ESINGULAR; SS_EINVAL.  Thread-safe.
  */
 SS_API int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
                           const double *tau, const ss_stab_opts *opts,
                           ss_orbit *o, ss_diag *d);
 
 /**
- * The duration equations of ss_orbit_solve() at the durations @a tau: the
- * start @a z0 that the periodicity system (5.1) gives, the n residuals
- * @a F (zero at an orbit), and, if @a J is not NULL, their analytic
- * Jacobian with respect to the durations (n x n, row-major).  For callers
- * that build their own solvers or continuation on these equations.
- * @return SS_OK; SS_EINVAL (bad sequence or count); SS_ESINGULAR (the
- *         periodicity system is singular at @a tau).
+ * The duration equations of ss_orbit_solve() at the durations @a tau, for
+ * callers that build their own solvers or continuation on them.  The start
+ * z0 is the solution of the periodicity system (5.1) at @a tau (rows 1-3 of
+ * (N - I) z0 + c = 0, the fourth row z2'(0) = V), and the n residuals are
+ *
+ *   F[0]   = chi (z2 - z1)(0) - (ur - us)     (3.1: z0 lies on Sigma0)
+ *   F[k+1] = the end condition of phase k, k = 0..n-2, at the state reached
+ *            after its duration: x2' - V for slip and overshoot (3.7),
+ *            chi (x2 - x1) - ur for a stick that ends in slip,
+ *            chi (x2 - x1) + ur for one that ends in overshoot;
+ *
+ * all vanish at an orbit (the last phase, a stick, ends on Sigma0 by (5.1)).
+ * @param n, modes   the phase sequence, as for ss_orbit_solve()
+ * @param tau        the n durations
+ * @param[out] z0    the start state in z = x - (d0, 0)
+ * @param[out] F     the n residuals
+ * @param[out] J     NULL, or room for n x n: the analytic Jacobian, row-major,
+ *                   J[n i + j] = dF[i] / dtau[j]
+ * @return SS_OK; SS_EINVAL (a NULL argument, or a sequence ss_orbit_solve()
+ *         refuses); SS_ESINGULAR (the periodicity system is singular at
+ *         @a tau; F and J are then not set).  Thread-safe; allocates nothing.
  */
 SS_API int ss_orbit_equations(const ss_model *m, int n, const ss_mode *modes,
                               const double *tau, double z0[4], double *F,
@@ -609,8 +685,11 @@ SS_API int ss_orbit_equations(const ss_model *m, int n, const ss_mode *modes,
  * Check the orbit in @a o (modes, durations, z0 set) by simulation with the
  * certified event finder: every phase must end at its FIRST crossing, at its
  * duration, into the next mode of the sequence, without grazing, and all
- * durations must be positive.  Fills the margins, period and closure.
- * @return SS_OK or SS_INFEASIBLE with the reason in @a d.
+ * durations must be positive.  Fills x0, n_turns, the margins, period and
+ * closure.
+ * @return SS_OK; SS_INFEASIBLE with the reason in @a d; SS_EINVAL (a phase
+ *         count outside 2..SS_MAX_PHASES, or a start that is not finite);
+ *         or a failure of the event search.
  */
 SS_API int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d);
 
@@ -621,12 +700,16 @@ SS_API int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d);
  * from a grid of durations for the overshoot and stick-slip kinds (which
  * finds unstable orbits), and Newton on the Poincare map P^k from points of
  * Sigma0.  Duplicates are removed; every orbit returned is feasible.
+ * @param opts          may be NULL (the defaults)
  * @param out, max_out  room for the orbits, sorted by kind then period
  * @param[out] n_out    number returned
  * @param[out] rep      what the search did, may be NULL
+ * @param d             details of a failure, may be NULL
  * @return SS_OK (possibly with *n_out = 0: then rep->reason says why) or a
- *         failure (SS_ELIMIT_TIME when the budget ran out: *n_out orbits
- *         were found before).
+ *         failure: SS_ELIMIT_TIME when the budget ran out or SS_ECANCELED
+ *         when the caller cancelled (*n_out orbits were found before);
+ *         SS_EINVAL (bad options or output).  Thread-safe (the cancel hook
+ *         aside).
  */
 SS_API int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts,
                          ss_orbit *out, int max_out, int *n_out,
@@ -635,11 +718,15 @@ SS_API int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts,
 /**
  * The Poincare map on Sigma0 by simulation: from s = (z1, z1') follow the
  * motion through @a turns stick -> slip returns.
- * @param[out] out     the point reached
- * @param[out] modes, durations, n_phases  the sequence travelled (may be NULL;
- *                     room for SS_MAX_PHASES)
+ * @param s            the start on Sigma0, (z1, z1')
+ * @param turns        returns to Sigma0 to follow, >= 1
  * @param max_events   give up after this many events (SS_ELIMIT_EVENTS)
- * @return SS_OK, SS_ELIMIT_EVENTS, SS_HORIZON (perpetual slip), or failure.
+ * @param[out] out     the point reached, (z1, z1')
+ * @param[out] modes, durations, n_phases  the sequence travelled (may be NULL;
+ *                     room for SS_MAX_PHASES phases, more is
+ *                     SS_ELIMIT_EVENTS)
+ * @return SS_OK, SS_ELIMIT_EVENTS, SS_HORIZON (perpetual slip), or a failure
+ *         (SS_EINVAL for a start that is not finite).  Thread-safe.
  */
 SS_API int ss_poincare(const ss_model *m, const double s[2], int turns,
                        size_t max_events, double out[2], ss_mode *modes,
@@ -653,9 +740,14 @@ SS_API int ss_poincare(const ss_model *m, const double s[2], int turns,
  * (f_k the vector field at the end of phase k, n_k the gradient of its
  * switching function), started from dZ_0 = (x, x, v, 0) on Sigma0 (4.3);
  * with opts->difference_check, also the central-difference Jacobian of
- * ss_poincare() over opts->turns returns.
+ * ss_poincare() over opts->turns returns (counted from the modes when 0).
+ * @param n, modes, tau  the phase sequence and its durations
+ *                       (1..SS_MAX_PHASES phases)
+ * @param z0    the start, on Sigma0, in z = x - (d0, 0)
  * @param opts  may be NULL (turns counted, no difference check)
+ * @param[out] st  the stability; st->jac_diff is NAN without the check
  * @return SS_OK, SS_EINVAL or SS_ESINGULAR (a phase ends tangentially).
+ *         Thread-safe.
  */
 SS_API int ss_stability(const ss_model *m, int n, const ss_mode *modes,
                         const double *tau, const double z0[4],

@@ -148,8 +148,11 @@ static int sim_find(ss_sim *s, double H) {
   ss__switching(s->m, SS_MODE_STICK, -1, s->x, &g);
   rc_lo = ss_trig_first_root(&g, 0, rc == SS_HORIZON ? H : fmax(t_up, 1e-300),
                              &t_lo);
-  /* SS_ABOVE: the force starts below -ur within the tolerance while the
-   * search for +ur decided; -ur is then not the next event. */
+  /* SS_ABOVE: the force starts below -ur beyond the tolerance while the
+   * search for +ur decided the state is a stick; -ur is then not the next
+   * event, as if it were never reached. */
+  if (rc_lo == SS_ABOVE)
+    rc_lo = SS_HORIZON;
   if (rc_lo < 0) {
     s->have_next = 0;
     return rc_lo;

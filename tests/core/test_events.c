@@ -52,7 +52,9 @@ static void shifted_cos(ss_trig *g, int k, double amp, double w, double s) {
 }
 
 /* EVIDENCE: README "How it works, and how it is checked" (certified event
- * location): "a root immediately after t = 0" */
+ * location): "Tested on a root 1e-10 after the start"; and stickslip.h
+ * ss_trig_first_root (Start): g(t0) within tol of zero starts the search just
+ * after t0 if g leaves downward, and t0 is the root if it rises. */
 static void test_immediate(void) {
   ss_trig g = {0};
   double t;
@@ -73,7 +75,8 @@ static void test_immediate(void) {
 }
 
 /* EVIDENCE: README "How it works, and how it is checked" (certified event
- * location): "two roots closer together than any fixed sampling step" */
+ * location): "no first root is skipped however close two roots are", tested
+ * on "pairs of roots 1.3e-6 apart" (here down to that separation). */
 static void test_close_roots(void) {
   for (double delta = 1e-4; delta >= 1e-12; delta *= 1e-2) {
     ss_trig g = {0};
@@ -93,8 +96,9 @@ static void test_close_roots(void) {
   }
 }
 
-/* EVIDENCE: README "The model" (grazing) and "How it works": "a tangential
- * (grazing) zero" */
+/* EVIDENCE: README "How it works, and how it is checked" (certified event
+ * location): "a maximum within that tolerance is a tangency (grazing)";
+ * stickslip.h ss_trig_first_root: a tangency is SS_GRAZING. */
 static void test_grazing(void) {
   ss_trig g = {0};
   double t;
@@ -123,8 +127,9 @@ static void test_grazing(void) {
   ASSERT_NEAR(t, oracle_root(&g, tm + 0.1, 30, 1e-4), 1e-12);
 }
 
-/* EVIDENCE: README "The model" (grazing): "a near miss that comes within 1e-9
- * of zero without touching" */
+/* EVIDENCE: README "The model" (grazing): "A near miss farther than the
+ * tolerance from zero is passed over"; README "How it works, and how it is
+ * checked": tested on "near misses 1e-9 to 1e-13 below zero". */
 static void test_near_miss(void) {
   ss_trig g = {0};
   double t;
@@ -161,7 +166,10 @@ static void test_near_miss(void) {
   }
 }
 
-/* EVIDENCE: README "How it works, and how it is checked": "no root at all" */
+/* EVIDENCE: README "How it works, and how it is checked" (certified event
+ * location): tested on "functions with no root"; stickslip.h
+ * ss_trig_first_root: SS_NEVER when g can never reach zero, SS_HORIZON when it
+ * does not before tmax. */
 static void test_no_root(void) {
   ss_trig g = {0};
   double t;
@@ -174,16 +182,28 @@ static void test_no_root(void) {
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 1e6, &t), SS_NEVER);
   g.c0 = -0.6 + 1e-12; /* sup is reached only asymptotically: horizon */
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 1e3, &t), SS_HORIZON);
-  g.c0 = 0.5; /* positive at the start: told apart from a bad argument */
+  /* EVIDENCE: stickslip.h ss_trig_first_root: SS_ABOVE when g is positive
+   * at t0 beyond tol, told apart from a bad argument */
+  g.c0 = 0.5;
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 10, &t), SS_ABOVE);
+  ASSERT_TRUE(SS_ABOVE > 0); /* information, not a failure */
   /* EVIDENCE: stickslip.h ss_trig_first_root: SS_EINVAL only for bad
-   * arguments */
+   * arguments (NULL, n outside 0..SS_TRIG_MAX, t0 not finite, tmax not above
+   * t0) */
   g.c0 = -1;
   ASSERT_EQ_INT(ss_trig_first_root(&g, 1, 1, &t), SS_EINVAL);
+  ASSERT_EQ_INT(ss_trig_first_root(&g, 2, 1, &t), SS_EINVAL);
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, NAN, &t), SS_EINVAL);
+  ASSERT_EQ_INT(ss_trig_first_root(&g, NAN, 10, &t), SS_EINVAL);
+  ASSERT_EQ_INT(ss_trig_first_root(&g, -INFINITY, 10, &t), SS_EINVAL);
   ASSERT_EQ_INT(ss_trig_first_root(NULL, 0, 10, &t), SS_EINVAL);
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 10, NULL), SS_EINVAL);
+  g.c0 = 0.5; /* a bad argument is SS_EINVAL even where g is above */
+  ASSERT_EQ_INT(ss_trig_first_root(&g, 1, 1, &t), SS_EINVAL);
+  g.c0 = -1;
   g.n = SS_TRIG_MAX + 1;
+  ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 10, &t), SS_EINVAL);
+  g.n = -1;
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 10, &t), SS_EINVAL);
 }
 
