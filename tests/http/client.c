@@ -94,8 +94,10 @@ int http_read(int fd, int timeout_ms, http_resp *r) {
       buf = realloc(buf, cap);
     }
     ssize_t k = recv(fd, buf + n, cap - n - 1, 0);
-    if (k <= 0)
+    if (k <= 0) {
+      r->eof = 1; /* closed or reset by the server */
       break;
+    }
     n += (size_t)k;
   }
   close(fd);

@@ -16,6 +16,7 @@ typedef struct http_resp {
   char ctype[96];
   char retry_after[16];
   char allow[32];
+  int eof; /* the server closed the connection (not a read timeout) */
 } http_resp;
 
 /* The source address of the calling thread's connections, e.g.
@@ -26,7 +27,7 @@ int http_connect(int port);
 /* Connect and send @a req; the socket (to read the answer from), or -1. */
 int http_send(int port, const char *req, size_t len);
 /* Read an answer until the server closes or @a timeout_ms passes without a
- * byte; closes @a fd.  0 when a response was read. */
+ * byte (r->eof tells which); closes @a fd.  0 when a response was read. */
 int http_read(int fd, int timeout_ms, http_resp *r);
 /* The text of a request with Connection: close (malloc'd), its length in
  * *len. */
