@@ -638,6 +638,13 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
   return d;
 }
 
+int srv_add_connection(struct srv_daemon *d, int fd,
+                       const struct sockaddr *addr, unsigned addrlen) {
+  return MHD_add_connection(d->mhd, fd, addr, (socklen_t)addrlen) == MHD_YES
+             ? 0
+             : -1;
+}
+
 static void wait_in_flight(struct srv_daemon *d, double until) {
   struct timespec ts = {0, 10 * 1000 * 1000};
   while (srv_metrics_in_flight(d->metrics, 0) > 0 && now() < until)

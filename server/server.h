@@ -99,6 +99,12 @@ char *srv_metrics_render(srv_metrics *m); /* malloc'd */
 /** Start the daemon; prints the URL to stderr when ready.  NULL on error. */
 struct srv_daemon;
 struct srv_daemon *srv_start(const srv_config *cfg);
+/** Hand the daemon a connected socket @a fd, as if it had accepted it from
+ *  @a addr (the HTTP fuzz target feeds it one end of a socketpair).  The
+ *  daemon owns @a fd from then on, also on failure.  0, or -1. */
+struct sockaddr;
+int srv_add_connection(struct srv_daemon *d, int fd,
+                       const struct sockaddr *addr, unsigned addrlen);
 /** Stop accepting, let requests in flight finish (up to cfg->drain s), stop. */
 void srv_stop(struct srv_daemon *d);
 
