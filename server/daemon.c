@@ -43,6 +43,7 @@
 #include "server.h"
 
 #define MONITOR_MS 20
+#define STREAM_CHUNK (32 * 1024) /* bytes of a streamed answer at a time */
 
 /* One TCP connection, from NOTIFY_CONNECTION's start to its close. */
 typedef struct conn {
@@ -85,6 +86,8 @@ typedef struct req {
   char *buf;
   size_t len, cap;
   int too_big;
+  int over_budget; /* the body came while the memory budget was spent */
+  long held;       /* bytes of body and answer counted against the budget */
   double t0;
   char method[8];
   char path[96];
@@ -131,11 +134,57 @@ static enum MHD_Result send_body(struct MHD_Connection *c, req *r, int status,
   return ok;
 }
 
+/* Count @a bytes against the memory budget for request @a r (negative to
+ * give them back). */
+static void hold(struct srv_daemon *d, req *r, long bytes) {
+  r->held += bytes;
+  srv_metrics_held(d->metrics, bytes);
+}
+
+static int over_budget(const struct srv_daemon *d) {
+  return srv_metrics_held(d->metrics, 0) >= (long)d->cfg.memory_mb << 20;
+}
+
+static ssize_t stream_read(void *cls, uint64_t pos, char *buf, size_t max) {
+  (void)pos;
+  long n = api_stream_read(cls, buf, max);
+  return n < 0   ? MHD_CONTENT_READER_END_WITH_ERROR
+         : n > 0 ? (ssize_t)n
+                 : MHD_CONTENT_READER_END_OF_STREAM;
+}
+
+static void stream_free(void *cls) { api_stream_free(cls); }
+
+/* A large answer, written a chunk at a time as the client reads it. */
+static enum MHD_Result send_stream(struct MHD_Connection *c, req *r,
+                                   api_response *ar) {
+  struct MHD_Response *resp = MHD_create_response_from_callback(
+      MHD_SIZE_UNKNOWN, STREAM_CHUNK, stream_read, ar->stream, stream_free);
+  enum MHD_Result ok;
+  if (!resp) {
+    api_response_free(ar);
+    return MHD_NO;
+  }
+  ar->stream = NULL; /* the response owns it now */
+  MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ar->content_type);
+  MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+  ok = MHD_queue_response(c, (unsigned)ar->status, resp);
+  MHD_destroy_response(resp);
+  r->status = ar->status;
+  r->done = 1;
+  return ok;
+}
+
 /* An answer of the api: a 503 always says when to come back, and a 413,
- * a 503 or a refused framing closes the connection. */
+ * a 503 or a refused framing closes the connection.  What the answer holds
+ * counts against the memory budget until the request completes. */
 static enum MHD_Result send_api(struct MHD_Connection *c, req *r,
                                 api_response *ar, const char *allow) {
   int busy = ar->status == 503;
+  if (r->d)
+    hold(r->d, r, (long)ar->held);
+  if (ar->stream)
+    return send_stream(c, r, ar);
   enum MHD_Result ok =
       send_body(c, r, ar->status, ar->body, ar->len, ar->content_type, busy,
                 allow, busy || ar->status == 413 || r->close);
@@ -168,7 +217,8 @@ static void handle(struct srv_daemon *d, req *r, api_response *ar) {
                           metrics_text,
                           d,
                           job_cancelled,
-                          &r->job};
+                          &r->job,
+                          d->cfg.stream_above};
   api_handle(r->ep, r->buf ? r->buf : "", r->len, &d->cfg.lim, &info, ar);
   if (ar->status >= 500 && ar->status != 503)
     fprintf(stderr, "stickslipd: %s %s answered %d: %.200s\n", r->method,
@@ -177,11 +227,35 @@ static void handle(struct srv_daemon *d, req *r, api_response *ar) {
 
 /* ---- the pool's side of a request ---------------------------------------- */
 
+static void budget_problem(struct srv_daemon *d, api_response *ar) {
+  char detail[160];
+  srv_metrics_over_budget(d->metrics);
+  snprintf(detail, sizeof detail,
+           "the answers in flight hold %.1f MiB, the memory budget is %zu "
+           "MiB; retry after a second",
+           (double)srv_metrics_held(d->metrics, 0) / 1048576.0,
+           d->cfg.memory_mb);
+  api_problem(ar, API_P_OVERLOADED, detail, NULL, NULL, 0);
+}
+
 static void job_queued(srv_job *j) { MHD_suspend_connection(((req *)j)->c); }
 
+/* The memory budget is checked again when the work starts: what was
+ * queued while it was free may find it spent. */
 static void job_run(srv_job *j) {
   req *r = (req *)j;
-  handle(r->d, r, &r->ar);
+  if (over_budget(r->d))
+    budget_problem(r->d, &r->ar);
+  else
+    handle(r->d, r, &r->ar);
+  /* the answer counts from now on, not from when it is sent */
+  hold(r->d, r, (long)r->ar.held);
+  r->ar.held = 0;
+  /* the body is no longer needed: give its bytes back now */
+  free(r->buf);
+  r->buf = NULL;
+  hold(r->d, r, -(long)r->len);
+  r->len = r->cap = 0;
 }
 
 /* Back to the I/O thread with an answer: the pool is done with the job. */
@@ -208,6 +282,11 @@ static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
   if (atomic_load(&d->draining))
     return send_problem(c, r, API_P_SHUTTING_DOWN,
                         "the server is shutting down", NULL, 0, NULL);
+  if (r->over_budget || over_budget(d)) {
+    api_response ar;
+    budget_problem(d, &ar);
+    return send_api(c, r, &ar, NULL);
+  }
   int rc = srv_pool_submit(d->pool, &r->job, r->cn ? r->cn->key : "?");
   if (rc == 0)
     return MHD_YES; /* suspended by job_queued; resumed by job_done */
@@ -347,6 +426,10 @@ static enum MHD_Result take_body(struct srv_daemon *d, req *r, const char *data,
     r->too_big = 1;
     return MHD_YES;
   }
+  if (r->over_budget || over_budget(d)) {
+    r->over_budget = 1; /* answered 503 once the body is in */
+    return MHD_YES;
+  }
   if (r->len + n + 1 > r->cap) {
     size_t cap = r->cap ? r->cap : 4096;
     while (cap < r->len + n + 1)
@@ -360,6 +443,7 @@ static enum MHD_Result take_body(struct srv_daemon *d, req *r, const char *data,
   memcpy(r->buf + r->len, data, n);
   r->len += n;
   r->buf[r->len] = 0;
+  hold(d, r, (long)n);
   return MHD_YES;
 }
 
@@ -434,6 +518,7 @@ static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
     r->cn->receiving = 1;
     pthread_mutex_unlock(&d->mu);
   }
+  srv_metrics_held(d->metrics, -r->held);
   api_response_free(&r->ar);
   free(r->buf);
   free(r);

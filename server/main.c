@@ -60,6 +60,10 @@ static const flag FLAGS[] = {
      "idle connection timeout, seconds"},
     {"--drain", F_DOUBLE, 0, 3600, CFG(drain),
      "grace for requests in flight on SIGTERM/SIGINT, seconds"},
+    {"--memory-budget", F_SIZE, 1, 1 << 20, CFG(memory_mb),
+     "MiB that request bodies and answers in flight may hold; new work "
+     "over it gets 503"},
+
 };
 #define N_FLAGS (sizeof FLAGS / sizeof FLAGS[0])
 
@@ -146,6 +150,8 @@ static void defaults(srv_config *cfg) {
   cfg->workers = nc > 0 ? (unsigned)nc : 1;
   cfg->client_queue = 64;
   cfg->request_timeout = 10;
+  cfg->memory_mb = 256;
+  cfg->stream_above = 64 * 1024;
   /* longer than a computation may take, so that the requests in flight at
    * a shutdown get their answers */
   cfg->drain = 15;

@@ -24,7 +24,8 @@ struct srv_metrics {
   size_t n; /* endpoints + "other" */
   ep_metrics *ep;
   atomic_long in_flight;
-  atomic_ulong rejected_busy, cancelled, slow;
+  atomic_ulong rejected_busy, cancelled, slow, rejected_memory;
+  atomic_long held, held_peak;
 };
 
 srv_metrics *srv_metrics_new(void) {
@@ -74,6 +75,18 @@ void srv_metrics_cancelled(srv_metrics *m) {
 }
 
 void srv_metrics_slow(srv_metrics *m) { atomic_fetch_add(&m->slow, 1); }
+
+void srv_metrics_over_budget(srv_metrics *m) {
+  atomic_fetch_add(&m->rejected_memory, 1);
+}
+
+long srv_metrics_held(srv_metrics *m, long delta) {
+  long now = atomic_fetch_add(&m->held, delta) + delta;
+  long peak = atomic_load(&m->held_peak);
+  while (now > peak && !atomic_compare_exchange_weak(&m->held_peak, &peak, now))
+    ;
+  return now;
+}
 
 long srv_metrics_in_flight(srv_metrics *m, int delta) {
   return atomic_fetch_add(&m->in_flight, delta) + delta;
@@ -174,5 +187,20 @@ char *srv_metrics_render(srv_metrics *m) {
       "stickslip_slow_closed_total %lu\n",
       atomic_load(&m->rejected_busy), atomic_load(&m->cancelled),
       atomic_load(&m->slow));
+  put(&s,
+      "# HELP stickslip_memory_held_bytes Bytes held by request bodies and "
+      "answers in flight, counted against --memory-budget.\n"
+      "# TYPE stickslip_memory_held_bytes gauge\n"
+      "stickslip_memory_held_bytes %ld\n"
+      "# HELP stickslip_memory_held_peak_bytes The highest value of "
+      "stickslip_memory_held_bytes since the start.\n"
+      "# TYPE stickslip_memory_held_peak_bytes gauge\n"
+      "stickslip_memory_held_peak_bytes %ld\n"
+      "# HELP stickslip_rejected_memory_total Requests "
+      "answered 503 because the memory budget was spent.\n"
+      "# TYPE stickslip_rejected_memory_total counter\n"
+      "stickslip_rejected_memory_total %lu\n",
+      atomic_load(&m->held), atomic_load(&m->held_peak),
+      atomic_load(&m->rejected_memory));
   return s.p;
 }

@@ -22,6 +22,8 @@ typedef struct srv_config {
   unsigned client_queue;   /**< --client-queue: waiting, per client (64) */
   double request_timeout;  /**< --request-timeout: headers and body (10) */
   double drain;            /**< --drain seconds at shutdown (15) */
+  size_t memory_mb;        /**< --memory-budget, MiB (256) */
+  size_t stream_above;     /**< answers larger than this are streamed */
   int quiet;               /**< --quiet: no access log */
 } srv_config;
 
@@ -93,6 +95,9 @@ void srv_metrics_observe(srv_metrics *m, size_t ep, int status, double seconds);
 void srv_metrics_busy(srv_metrics *m);      /* a 503 for a full queue */
 void srv_metrics_cancelled(srv_metrics *m); /* work of a client gone away */
 void srv_metrics_slow(srv_metrics *m);      /* a connection past its deadline */
+void srv_metrics_over_budget(srv_metrics *m); /* a 503 for the memory budget */
+/* Bytes held by bodies and answers: add @a delta, return the new total. */
+long srv_metrics_held(srv_metrics *m, long delta);
 long srv_metrics_in_flight(srv_metrics *m, int delta);
 char *srv_metrics_render(srv_metrics *m); /* malloc'd */
 

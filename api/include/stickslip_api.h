@@ -36,16 +36,32 @@ typedef struct api_limits {
 /** Fill @a l with the defaults documented in the README. */
 void api_limits_default(api_limits *l);
 
-/** A response: status, body (malloc'd, NUL-terminated), media type. */
+/** A large answer written as it is read (see api_server_info.stream_above). */
+typedef struct api_stream api_stream;
+
+/** A response: status, media type, and either a body (malloc'd,
+ *  NUL-terminated) or a stream. */
 typedef struct api_response {
   int status;
-  char *body;
+  char *body; /**< NULL when the answer is a stream */
   size_t len;
   const char *content_type; /**< static string */
+  api_stream *stream;       /**< read with api_stream_read, or NULL */
+  size_t held; /**< bytes the answer keeps in memory until it is freed */
 } api_response;
 
-/** Free the body; NULL-safe. */
+/** Free the body or the stream; NULL-safe. */
 void api_response_free(api_response *r);
+
+/**
+ * The next bytes of a streamed answer, at most @a max of them, into @a buf.
+ * @return the number written (less than @a max only at the end), 0 once
+ *         the answer is complete, -1 when out of memory.
+ */
+long api_stream_read(api_stream *s, char *buf, size_t max);
+
+/** Free a stream (and the result it reads from); NULL-safe. */
+void api_stream_free(api_stream *s);
 
 /* ------------------------------------------------------------------------ */
 /* The endpoint table                                                        */
@@ -96,6 +112,10 @@ typedef struct api_server_info {
    *  never. */
   int (*cancelled)(void *cls);
   void *cancel_cls;
+  /** Answers whose large arrays (samples, events) hold more than this many
+   *  bytes are streamed (api_response.stream) instead of written whole;
+   *  0: never. */
+  size_t stream_above;
 } api_server_info;
 
 /**

@@ -59,10 +59,13 @@ void api__problem_response(const api_err *e, api_response *out);
 
 /* ---- one call of an endpoint ------------------------------------------- */
 
+typedef struct api_lazies api_lazies;
+
 typedef struct api_call {
   const api_limits *lim;
   const api_server_info *srv; /* may be NULL */
   api_err *e;
+  api_lazies *lazy; /* the answer's lazy arrays (writer.c) */
 } api_call;
 
 /* ---- declarative request specs ----------------------------------------- */
@@ -250,8 +253,11 @@ int api__answer(json_t *out, const api_spec *spec, const void *x,
                 const api_params *ap, const api_call *c, api_response *resp);
 
 /* The samples of a simulation as columns t, x1, x2, v1, v2, mode, in the
- * units of the request. */
-json_t *api__samples(const ss_sim_result *r, const api_params *ap);
+ * units of the request: lazy arrays read from @a r when the answer is
+ * written, so @a r must live as long as the answer (it is part of the
+ * endpoint's struct). */
+json_t *api__samples(const ss_sim_result *r, const api_params *ap,
+                     const api_call *c);
 
 /* The phases of an orbit [{mode, duration}] in the units of the request. */
 json_t *api__phases(int n, const ss_mode *modes, const double *tau,
@@ -262,8 +268,51 @@ json_t *api__phases(int n, const ss_mode *modes, const double *tau,
 json_t *api__jacobian(const double J[2][2], const api_params *ap);
 json_t *api__stability(const ss_stab *st, const api_params *ap);
 
-/* A 200 application/json answer with the body of @a j (consumed). */
-int api__json_response(json_t *j, api_response *out, api_err *e);
+/* ---- the writer (writer.c) --------------------------------------------- */
+
+typedef struct api_wbuf {
+  char *p;
+  size_t len, cap;
+  int oom;
+} api_wbuf;
+
+/* Append bytes, a JSON string, a number (shortest exact digits; null when
+ * not finite). */
+void api__w_put(api_wbuf *b, const char *s, size_t n);
+void api__w_str(api_wbuf *b, const char *s, size_t n);
+void api__w_real(api_wbuf *b, double v);
+#define API_W_LIT(b, lit) api__w_put(b, lit, sizeof(lit) - 1)
+
+/* A lazy array: n elements, element i written by item() from a, b, k. */
+typedef struct api_lazy api_lazy;
+typedef void api_item_fn(api_wbuf *w, const api_lazy *l, size_t i);
+struct api_lazy {
+  const json_t *marker;
+  api_item_fn *item;
+  const void *a, *b;
+  int k;
+  size_t n;
+};
+struct api_lazies {
+  api_lazy *v;
+  size_t n, cap;
+  size_t held; /* bytes of the arrays they are read from */
+};
+
+/* The marker of a lazy array of @a n elements, to be put in the answer's
+ * tree where the array goes (NULL when out of memory).  What @a a and @a b
+ * point to must live as long as the endpoint's struct.  @a held: the bytes
+ * of the core arrays it reads, which a streamed answer keeps. */
+json_t *api__lazy(const api_call *c, size_t n, api_item_fn *item, const void *a,
+                  const void *b, int k, size_t held);
+void api__lazies_free(api_lazies *lz);
+
+/* A 200 application/json answer with the body of @a j (consumed): written
+ * whole, or a stream when its lazy arrays are larger than the server's
+ * stream_above (the caller then hands the stream the endpoint's struct with
+ * api__stream_own). */
+int api__json_response(json_t *j, const api_call *c, api_response *out);
+void api__stream_own(api_stream *s, void *x, void (*release)(void *));
 
 /* The compact text of @a j (malloc'd, NUL-terminated, length in *len), with
  * reals in the shortest of 15-17 significant digits that reads back exactly;

@@ -123,7 +123,8 @@ int api_handle(size_t index, const char *body, size_t len,
                const api_limits *lim, const api_server_info *srv,
                api_response *out) {
   api_err e;
-  api_call c = {lim, srv, &e};
+  api_lazies lz = {NULL, 0, 0, 0};
+  api_call c = {lim, srv, &e, &lz};
   json_t *root = NULL;
   void *x = NULL;
   memset(&e, 0, sizeof e);
@@ -148,7 +149,11 @@ int api_handle(size_t index, const char *body, size_t len,
                "computing and encoding the answer took %.3g s, over the "
                "limit of %g s",
                now() - t0, lim->max_seconds);
-  ep->release(x);
+  if (out->stream && !e.set)
+    api__stream_own(out->stream, x, ep->release); /* read from x later */
+  else
+    ep->release(x);
+  api__lazies_free(&lz);
   json_decref(root);
   if (e.set) {
     api_response_free(out);

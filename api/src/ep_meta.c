@@ -35,7 +35,7 @@ int ep_health_encode(const void *x, const api_call *c, api_response *out) {
     api__set(o, "uptime_seconds", api__real(c->srv->uptime_seconds));
     api__set(o, "in_flight", json_integer(c->srv->in_flight));
   }
-  return api__json_response(o, out, c->e);
+  return api__json_response(o, c, out);
 }
 
 int ep_version_encode(const void *x, const api_call *c, api_response *out) {
@@ -47,7 +47,7 @@ int ep_version_encode(const void *x, const api_call *c, api_response *out) {
   api__set(o, "jansson", json_string(JANSSON_VERSION));
   if (c->srv && c->srv->transport)
     api__set(o, "microhttpd", json_string(c->srv->transport));
-  return api__json_response(o, out, c->e);
+  return api__json_response(o, c, out);
 }
 
 static int text(const char *s, size_t n, const char *ctype, api_response *out,

@@ -201,7 +201,7 @@ static json_t *margins_json(const ss_orbit *o, const api_params *ap) {
 }
 
 static json_t *orbit_json(const ss_orbit *o, const ss_sim_result *path,
-                          const api_params *ap) {
+                          const api_params *ap, const api_call *c) {
   json_t *j = json_object();
   api__set(j, "kind", json_string(ss_orbit_kind_name(o->kind)));
   api__set(j, "phases", api__phases(o->n_phases, o->modes, o->durations, ap));
@@ -216,7 +216,7 @@ static json_t *orbit_json(const ss_orbit *o, const ss_sim_result *path,
   api__set(j, "iterations", json_integer(o->iterations));
   api__set(j, "source", json_string(ss_orbit_source_name(o->source)));
   if (path && path->n_samples)
-    api__set(j, "samples", api__samples(path, ap));
+    api__set(j, "samples", api__samples(path, ap, c));
   return j;
 }
 
@@ -238,7 +238,8 @@ int ep_orbit_encode(const void *xp, const api_call *c, api_response *out) {
   json_t *o = json_object(), *arr = json_array();
   for (int i = 0; i < x->n; i++)
     json_array_append_new(
-        arr, orbit_json(&x->orbits[i], x->paths ? &x->paths[i] : NULL, &x->ap));
+        arr,
+        orbit_json(&x->orbits[i], x->paths ? &x->paths[i] : NULL, &x->ap, c));
   api__set(o, "orbits", arr);
   if (x->rep.reason[0])
     api__set(o, "reason", json_string(x->rep.reason));

@@ -206,16 +206,29 @@ int ep_simulate_run(void *xp, const api_call *c) {
   return api__from_diag(c->e, rc, &d, "");
 }
 
-static json_t *event_json(const ss_event *ev, const api_params *ap) {
-  json_t *o = json_object();
-  api__set(o, "t", api__real(api__time_out(ap, ev->t)));
-  api__set(o, "from", json_string(ss_mode_name(ev->from)));
-  api__set(o, "to", json_string(ss_mode_name(ev->to)));
-  api__set(
-      o, "kind",
-      json_string(ev->kind == SS_EVENT_GRAZING ? "grazing" : "transition"));
-  api__set(o, "x", api__state(ap, ev->x));
-  return o;
+/* Event i of the result a: {t, from, to, kind, x}. */
+static void event_item(api_wbuf *w, const api_lazy *l, size_t i) {
+  const ss_event *ev = &((const ss_sim_result *)l->a)->events[i];
+  const api_params *ap = l->b;
+  const char *from = ss_mode_name(ev->from), *to = ss_mode_name(ev->to);
+  const char *kind = ev->kind == SS_EVENT_GRAZING ? "grazing" : "transition";
+  double y[4];
+  API_W_LIT(w, "{\"t\":");
+  api__w_real(w, api__time_out(ap, ev->t));
+  API_W_LIT(w, ",\"from\":");
+  api__w_str(w, from, strlen(from));
+  API_W_LIT(w, ",\"to\":");
+  api__w_str(w, to, strlen(to));
+  API_W_LIT(w, ",\"kind\":");
+  api__w_str(w, kind, strlen(kind));
+  API_W_LIT(w, ",\"x\":[");
+  ss_to_physical(ap->omega, 0, ev->x, NULL, y);
+  for (int k = 0; k < 4; k++) {
+    if (k)
+      API_W_LIT(w, ",");
+    api__w_real(w, y[k]);
+  }
+  API_W_LIT(w, "]}");
 }
 
 int ep_simulate_encode(const void *xp, const api_call *c, api_response *out) {
@@ -229,14 +242,12 @@ int ep_simulate_encode(const void *xp, const api_call *c, api_response *out) {
   api__set(o, "n_events", json_integer((json_int_t)r->n_events));
   api__set(o, "n_grazing", json_integer((json_int_t)r->n_grazing));
   api__set(o, "perpetual_slip", json_boolean(r->perpetual));
-  if (x->events) {
-    json_t *ev = json_array();
-    for (size_t i = 0; i < r->n_events; i++)
-      json_array_append_new(ev, event_json(&r->events[i], &x->ap));
-    api__set(o, "events", ev);
-  }
+  if (x->events)
+    api__set(o, "events",
+             api__lazy(c, r->n_events, event_item, r, &x->ap, 0,
+                       r->n_events * sizeof *r->events));
   if (x->has_samples)
-    api__set(o, "samples", api__samples(r, &x->ap));
+    api__set(o, "samples", api__samples(r, &x->ap, c));
   return api__answer(o, &SPEC, x, &x->ap, c, out);
 }
 

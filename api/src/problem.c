@@ -137,6 +137,7 @@ static void respond(api_response *out, api_problem_kind kind,
                     double limit_value) {
   const problem_row *row = &PROBLEMS[kind];
   json_t *o = json_object();
+  memset(out, 0, sizeof *out);
   char type[96];
   snprintf(type, sizeof type, "/problems/%s", row->type);
   json_object_set_new(o, "type", json_string(type));
@@ -153,6 +154,7 @@ static void respond(api_response *out, api_problem_kind kind,
   out->body = json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII);
   out->len = out->body ? strlen(out->body) : 0;
   out->content_type = "application/problem+json";
+  out->held = out->len;
   json_decref(o);
   if (!out->body) {
     static const char fallback[] =
@@ -161,6 +163,7 @@ static void respond(api_response *out, api_problem_kind kind,
     out->status = 503;
     out->body = strdup(fallback);
     out->len = out->body ? strlen(out->body) : 0;
+    out->held = out->len;
   }
 }
 
@@ -172,7 +175,6 @@ void api__problem_response(const api_err *e, api_response *out) {
 
 void api_problem(api_response *out, api_problem_kind kind, const char *detail,
                  const char *pointer, const char *limit, double limit_value) {
-  memset(out, 0, sizeof *out);
   respond(out, (unsigned)kind < API_P_COUNT ? kind : API_P_INTERNAL, detail,
           pointer, limit, limit_value);
 }
@@ -181,6 +183,9 @@ void api_response_free(api_response *r) {
   if (!r)
     return;
   free(r->body);
+  api_stream_free(r->stream);
   r->body = NULL;
+  r->stream = NULL;
   r->len = 0;
+  r->held = 0;
 }

@@ -9,6 +9,8 @@
 #include <ctype.h>
 #include <dirent.h>
 #include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "codec.h"
@@ -178,6 +180,79 @@ static void test_status_table(void) {
   ASSERT_TRUE(!strcmp(e.pointer, "/t_end"));
 }
 
+/* The answer of @a body at @a ep read from a stream in pieces of @a step
+ * bytes (malloc'd), or NULL when it was not streamed. */
+static char *streamed(size_t ep, const char *body, size_t step, size_t *n) {
+  api_limits lim;
+  api_server_info srv = {0};
+  api_response r;
+  api_limits_default(&lim);
+  srv.stream_above = 1;
+  api_handle(ep, body, strlen(body), &lim, &srv, &r);
+  if (!r.stream || r.body) {
+    api_response_free(&r);
+    return NULL;
+  }
+  size_t cap = 1 << 16, len = 0;
+  char *out = malloc(cap);
+  long k;
+  do {
+    if (len + step + 1 > cap)
+      out = realloc(out, cap = 2 * (len + step + 1));
+    k = api_stream_read(r.stream, out + len, step);
+    ASSERT_TRUE(k >= 0 && (size_t)k <= step);
+    len += (size_t)(k > 0 ? k : 0);
+  } while (k > 0);
+  out[len] = 0;
+  *n = len;
+  api_response_free(&r);
+  return out;
+}
+
+/* EVIDENCE: README "Limits": a streamed answer is the same bytes as the
+ * answer written whole, however it is read */
+static void test_streams(void) {
+  static const char *const bodies[][2] = {
+      {"/simulate",
+       "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,"
+       "\"V\":1},\"initial\":[1.27,4.36,-0.8,1.0],\"t_end\":300,"
+       "\"samples\":{\"n\":777}}"},
+      {"/simulate",
+       "{\"physical\":{\"m1\":2.5,\"m2\":0.625,\"k1\":8,\"k2\":2,"
+       "\"Fs\":0.724,\"Fr\":6.178,\"v0\":2},\"initial\":[0,0,0,2],"
+       "\"t_end\":50,\"samples\":{\"t\":[0,1,2.5]},\"events\":true}"},
+      {"/orbit", "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,"
+                 "\"ur\":0.6178,\"V\":1},\"kind\":\"all\",\"samples\":50}"},
+  };
+  static const size_t steps[] = {1, 7, 100, 4096, 1 << 20};
+  int compared = 0;
+  for (size_t b = 0; b < sizeof bodies / sizeof bodies[0]; b++) {
+    size_t ep;
+    ASSERT_EQ_INT(api_route("POST", bodies[b][0], &ep), 200);
+    api_limits lim;
+    api_response whole;
+    api_limits_default(&lim);
+    api_handle(ep, bodies[b][1], strlen(bodies[b][1]), &lim, NULL, &whole);
+    if (whole.status != 200)
+      printf("%s: %s\n", bodies[b][0], whole.body);
+    ASSERT_EQ_INT(whole.status, 200);
+    ASSERT_TRUE(whole.body && !whole.stream);
+    for (size_t s = 0; s < sizeof steps / sizeof steps[0]; s++) {
+      size_t n = 0;
+      char *t = streamed(ep, bodies[b][1], steps[s], &n);
+      ASSERT_TRUE(t != NULL);
+      if (t) {
+        ASSERT_EQ_INT((int)n, (int)whole.len);
+        ASSERT_TRUE(n == whole.len && memcmp(t, whole.body, n) == 0);
+        compared++;
+      }
+      free(t);
+    }
+    api_response_free(&whole);
+  }
+  ASSERT_EQ_INT(compared, 15);
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     fprintf(stderr, "usage: test_endpoints CASES_DIR\n");
@@ -187,5 +262,6 @@ int main(int argc, char **argv) {
   test_cases_cover_table(argv[1]);
   test_problem_table();
   test_status_table();
+  test_streams();
   TEST_DONE();
 }

@@ -81,6 +81,27 @@ int http_send(int port, const char *req, size_t len) {
   return fd;
 }
 
+/* Decode a chunked body in place (it only shrinks); -1 when malformed. */
+static int dechunk(char *body) {
+  char *in = body, *out = body;
+  for (;;) {
+    char *end;
+    unsigned long n = strtoul(in, &end, 16);
+    if (end == in || !(end = strstr(end, "\r\n")))
+      return -1;
+    in = end + 2;
+    if (n == 0)
+      break;
+    if (strlen(in) < n + 2)
+      return -1;
+    memmove(out, in, n);
+    out += n;
+    in += n + 2;
+  }
+  *out = 0;
+  return 0;
+}
+
 int http_read(int fd, int timeout_ms, http_resp *r) {
   memset(r, 0, sizeof *r);
   size_t cap = 65536, n = 0;
@@ -111,6 +132,13 @@ int http_read(int fd, int timeout_ms, http_resp *r) {
   header(buf, "Content-Type", r->ctype, sizeof r->ctype);
   header(buf, "Retry-After", r->retry_after, sizeof r->retry_after);
   header(buf, "Allow", r->allow, sizeof r->allow);
+  char te[32];
+  header(buf, "Transfer-Encoding", te, sizeof te);
+  if (strcmp(te, "chunked") == 0) {
+    r->chunked = 1;
+    if (dechunk(r->body))
+      return -2;
+  }
   return 0;
 }
 

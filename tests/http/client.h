@@ -16,7 +16,8 @@ typedef struct http_resp {
   char ctype[96];
   char retry_after[16];
   char allow[32];
-  int eof; /* the server closed the connection (not a read timeout) */
+  int eof;     /* the server closed the connection (not a read timeout) */
+  int chunked; /* the body came chunked (it is decoded in body) */
 } http_resp;
 
 /* The source address of the calling thread's connections, e.g.
