@@ -91,6 +91,7 @@ typedef struct req {
   double t0;
   char method[8];
   char path[96];
+  char key[SRV_CLIENT_KEY]; /* the client, for the pool's queues */
   api_response ar;
   /* An answer decided on the first call, sent on a later one: libmicrohttpd
    * handles a response queued during the first call of a request far more
@@ -287,7 +288,7 @@ static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
     budget_problem(d, &ar);
     return send_api(c, r, &ar, NULL);
   }
-  int rc = srv_pool_submit(d->pool, &r->job, r->cn ? r->cn->key : "?");
+  int rc = srv_pool_submit(d->pool, &r->job, r->key);
   if (rc == 0)
     return MHD_YES; /* suspended by job_queued; resumed by job_done */
   if (rc == SRV_POOL_FULL) {
@@ -305,6 +306,35 @@ static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
 }
 
 /* ---- headers ------------------------------------------------------------- */
+
+/* The client of a request: the peer's address, or, when the peer is a
+ * trusted proxy, the first address of X-Forwarded-For (the one the first
+ * proxy saw), if it is an address. */
+static void client_of(const struct srv_daemon *d, struct MHD_Connection *c,
+                      req *r) {
+  const char *peer = r->cn ? r->cn->key : "?";
+  snprintf(r->key, sizeof r->key, "%s", peer);
+  int trusted = 0;
+  for (int i = 0; i < d->cfg.n_trusted && !trusted; i++)
+    trusted = strcmp(peer, d->cfg.trusted[i]) == 0;
+  const char *xff = trusted ? MHD_lookup_connection_value(c, MHD_HEADER_KIND,
+                                                          "X-Forwarded-For")
+                            : NULL;
+  if (!xff)
+    return;
+  char first[SRV_CLIENT_KEY];
+  unsigned char ip[16];
+  xff += strspn(xff, " \t");
+  size_t n = strcspn(xff, ", \t");
+  if (n == 0 || n >= sizeof first)
+    return;
+  memcpy(first, xff, n);
+  first[n] = 0;
+  if (inet_pton(AF_INET, first, ip) == 1)
+    inet_ntop(AF_INET, ip, r->key, sizeof r->key);
+  else if (inet_pton(AF_INET6, first, ip) == 1)
+    inet_ntop(AF_INET6, ip, r->key, sizeof r->key);
+}
 
 static int is_json_type(const char *ct) {
   if (!ct)
@@ -380,6 +410,7 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
   r->ep = api_endpoint_count();
   snprintf(r->method, sizeof r->method, "%s", method);
   snprintf(r->path, sizeof r->path, "%s", url);
+  client_of(d, c, r);
   srv_metrics_in_flight(d->metrics, +1);
   const char *bad = smuggling(c);
   if (bad) {

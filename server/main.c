@@ -2,6 +2,7 @@
  * main.c: stickslipd's flags, environment and signals.
  */
 #define _GNU_SOURCE
+#include <arpa/inet.h>
 #include <errno.h>
 #include <jansson.h>
 #include <pthread.h>
@@ -117,6 +118,11 @@ static void usage(FILE *f, const srv_config *defaults) {
     fprintf(f, "  %-25s %s (%.10g)\n", name, FLAGS[i].help,
             get_value(defaults, &FLAGS[i]));
   }
+  fprintf(
+      f,
+      "  --trusted-proxy ADDR      a proxy whose X-Forwarded-For names the\n"
+      "                            client (repeatable, up to %d)\n",
+      SRV_MAX_PROXIES);
   fprintf(f, "  --quiet                   no access log\n"
              "  --version                 print the version and exit\n"
              "  --help                    this text\n");
@@ -196,6 +202,23 @@ static int configure(srv_config *cfg, int argc, char **argv) {
     } else if (!strcmp(a, "--bind")) {
       fprintf(stderr, "stickslipd: --bind needs an address\n");
       return 2;
+    } else if (!strcmp(a, "--trusted-proxy")) {
+      unsigned char ip[16];
+      if (!v ||
+          (inet_pton(AF_INET, v, ip) != 1 && inet_pton(AF_INET6, v, ip) != 1)) {
+        fprintf(stderr, "stickslipd: --trusted-proxy needs an IPv4 or IPv6 "
+                        "address\n");
+        return 2;
+      }
+      if (cfg->n_trusted == SRV_MAX_PROXIES) {
+        fprintf(stderr, "stickslipd: at most %d --trusted-proxy\n",
+                SRV_MAX_PROXIES);
+        return 2;
+      }
+      /* the text as inet_ntop writes it, as the peer's key is written */
+      char *t = cfg->trusted[cfg->n_trusted++];
+      inet_ntop(strchr(v, ':') ? AF_INET6 : AF_INET, ip, t, 48);
+      i++;
     } else {
       fprintf(stderr, "stickslipd: unknown option %s (see --help)\n", a);
       return 2;

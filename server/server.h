@@ -9,6 +9,8 @@
 
 #include "stickslip_api.h"
 
+#define SRV_MAX_PROXIES 16
+
 /** Everything a flag or an environment variable can set. */
 typedef struct srv_config {
   char bind[64];           /**< --bind, STICKSLIP_BIND (127.0.0.1) */
@@ -25,6 +27,10 @@ typedef struct srv_config {
   size_t memory_mb;        /**< --memory-budget, MiB (256) */
   size_t stream_above;     /**< answers larger than this are streamed */
   int quiet;               /**< --quiet: no access log */
+  /** --trusted-proxy (repeatable): peers whose X-Forwarded-For names the
+   *  client, for the per-client queues */
+  char trusted[SRV_MAX_PROXIES][48];
+  int n_trusted;
 } srv_config;
 
 /* ---- the compute pool (pool.c) ----------------------------------------- */

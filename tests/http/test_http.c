@@ -674,6 +674,77 @@ static void test_slow_client(void) {
   unlink(d.log_path);
 }
 
+/* A long /simulate sent with X-Forwarded-For: @a xff; its socket. */
+static int start_forwarded(int port, const char *xff) {
+  char req[1024];
+  int n = snprintf(req, sizeof req,
+                   "POST /simulate HTTP/1.1\r\nHost: x\r\nContent-Type: "
+                   "application/json\r\nX-Forwarded-For: %s\r\n"
+                   "Content-Length: %zu\r\n\r\n%s",
+                   xff, strlen(LONG_SIM), LONG_SIM);
+  return http_send(port, req, (size_t)n);
+}
+
+/* The status of the answer on @a fd within @a ms, or 0 (none yet). */
+static int status_within(int fd, int ms) {
+  char head[16] = {0};
+  struct pollfd p = {fd, POLLIN, 0};
+  if (poll(&p, 1, ms) > 0 && recv(fd, head, 12, 0) == 12)
+    return atoi(head + 9);
+  return 0;
+}
+
+/* Which client a request is, with and without --trusted-proxy: with one
+ * computation per client and no waiting, a second long request of the same
+ * client gets 503 at once, another client's runs.  Behind a trusted proxy
+ * the client is the first address of X-Forwarded-For; from any other peer
+ * the header is ignored. */
+static void run_forwarded(int trusted, const char *xff1, const char *xff2,
+                          int want2) {
+  daemon_proc d;
+  const char *args[] = {"--client-workers",
+                        "1",
+                        "--client-queue",
+                        "0",
+                        "--workers",
+                        "2",
+                        "--max-events",
+                        "1000000000",
+                        "--max-horizon",
+                        "1e10",
+                        "--max-seconds",
+                        "600",
+                        "--trusted-proxy",
+                        trusted ? "127.0.0.1" : "127.0.0.9",
+                        NULL};
+  ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
+  int a = start_forwarded(d.port, xff1);
+  usleep(200000);
+  int b = start_forwarded(d.port, xff2);
+  int sb = status_within(b, 500);
+  if (sb != want2)
+    printf("forwarded: trusted %d, second from %s: %d, want %d\n", trusted,
+           xff2, sb, want2);
+  ASSERT_EQ_INT(sb, want2);
+  close(a);
+  close(b);
+  ASSERT_EQ_INT(daemon_stop(&d), 0);
+  unlink(d.log_path);
+}
+
+/* EVIDENCE: README "Limits": --trusted-proxy */
+static void test_forwarded(void) {
+  const char *first = "10.0.0.1, 127.0.0.1";
+  run_forwarded(1, first, "10.0.0.2", 0);    /* another client: it runs */
+  run_forwarded(1, first, " 10.0.0.1", 503); /* the same client */
+  /* an untrusted peer: the header is ignored, both are 127.0.0.1 */
+  run_forwarded(0, first, "10.0.0.2", 503);
+  /* not an address: the client is the peer */
+  run_forwarded(1, "unknown", "::1x", 503);
+  printf("forwarded: clients told apart by X-Forwarded-For from a trusted "
+         "proxy only\n");
+}
+
 /* VmHWM (peak resident set) of a process, MiB; -1 when unknown. */
 static double peak_rss_mib(pid_t pid) {
   char path[64], line[256];
@@ -1053,5 +1124,6 @@ int main(int argc, char **argv) {
   test_shutdown();
   test_slow_client();
   test_memory();
+  test_forwarded();
   TEST_DONE();
 }
