@@ -1,0 +1,131 @@
+/*
+ * fuzz_http.c: a live stickslipd on arbitrary bytes.
+ *
+ * One daemon is started in the process (the same code as stickslipd, the
+ * static library stickslipd_lib), with small compute limits.  Each input is
+ * written, raw, to one end of a socketpair whose other end is handed to the
+ * daemon as an accepted connection (srv_add_connection); the writing side
+ * is then shut down and everything the daemon answers is read until it
+ * closes.  Whatever the bytes, the daemon must not crash, leak or hang (an
+ * answer not complete within 10 s aborts), and what it sends back, if
+ * anything, must be HTTP/1.x responses.  Built as a libFuzzer target with
+ * clang (-DSTICKSLIP_FUZZ=ON) and, with replay.c, as an ordinary test that
+ * runs the stored corpus (tests/fuzz/http_corpus).
+ */
+#define _GNU_SOURCE
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "server.h"
+#include "stickslip.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static struct srv_daemon *daemon_once(void) {
+  static struct srv_daemon *d;
+  if (d)
+    return d;
+  srv_config cfg;
+  memset(&cfg, 0, sizeof cfg);
+  snprintf(cfg.bind, sizeof cfg.bind, "127.0.0.1");
+  cfg.port = 0;
+  api_limits_default(&cfg.lim);
+  cfg.lim.max_body = 64 * 1024;
+  cfg.lim.max_samples = 2000;
+  cfg.lim.max_events = 20000;
+  cfg.lim.max_event_list = 2000;
+  cfg.lim.max_horizon = 1e4;
+  cfg.lim.max_seconds = 0.2;
+  cfg.lim.max_orbits = 4;
+  cfg.max_conn = 64;
+  cfg.per_ip = 64;
+  cfg.timeout = 3;
+  cfg.workers = 2;
+  cfg.client_workers = 1;
+  cfg.client_queue = 64;
+  /* libmicrohttpd 0.9.75 keeps a connection whose peer half-closed in the
+   * middle of a request line (say "PGE" then EOF) open; the daemon's
+   * request deadline is what closes it, so it is short here */
+  cfg.request_timeout = 0.3;
+  cfg.drain = 1;
+  cfg.quiet = 1;
+  cfg.memory_mb = 64;
+  cfg.stream_above = 4096; /* so that small answers stream too */
+  ss_gsl_quiet();
+  signal(SIGPIPE, SIG_IGN);
+  if (!(d = srv_start(&cfg)))
+    abort();
+  return d;
+}
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  struct srv_daemon *d = daemon_once();
+  int sv[2];
+  if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
+    abort();
+  /* a local peer: libmicrohttpd then sets no TCP options on it */
+  struct sockaddr_un peer;
+  memset(&peer, 0, sizeof peer);
+  peer.sun_family = AF_UNIX;
+  if (srv_add_connection(d, sv[1], (struct sockaddr *)&peer, sizeof peer)) {
+    close(sv[0]);
+    return 0; /* the daemon refused it (and closed its end) */
+  }
+  /* write the input while reading what comes back, so that neither side
+   * blocks on a full buffer */
+  size_t sent = 0, got = 0, cap = 1 << 16;
+  char *buf = malloc(cap);
+  int wr_open = 1;
+  double deadline = now() + 10;
+  for (;;) {
+    if (wr_open && sent == size) {
+      shutdown(sv[0], SHUT_WR);
+      wr_open = 0;
+    }
+    struct pollfd p = {sv[0], (short)(POLLIN | (wr_open ? POLLOUT : 0)), 0};
+    int ms = (int)((deadline - now()) * 1e3);
+    if (ms <= 0 || poll(&p, 1, ms) <= 0) {
+      fprintf(stderr, "fuzz_http: no end of the answer within 10 s\n");
+      abort();
+    }
+    if (wr_open && (p.revents & POLLOUT)) {
+      ssize_t k = send(sv[0], data + sent, size - sent, MSG_NOSIGNAL);
+      if (k > 0)
+        sent += (size_t)k;
+      else
+        wr_open = 0; /* the daemon closed: no more to write */
+    }
+    if (p.revents & (POLLIN | POLLHUP | POLLERR)) {
+      if (got + 4096 > cap)
+        buf = realloc(buf, cap *= 2);
+      ssize_t k = recv(sv[0], buf + got, cap - got, 0);
+      if (k <= 0)
+        break;
+      got += (size_t)k;
+    }
+  }
+  close(sv[0]);
+  if (got && (got < 8 || memcmp(buf, "HTTP/1.", 7) != 0)) {
+    fprintf(stderr, "fuzz_http: the answer is not HTTP: %.*s\n",
+            (int)(got < 200 ? got : 200), buf);
+    abort();
+  }
+  free(buf);
+  return 0;
+}
