@@ -307,6 +307,14 @@ static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
 
 /* ---- headers ------------------------------------------------------------- */
 
+int srv_address_text(const char *s, char *out, size_t n) {
+  unsigned char ip[16];
+  int af = inet_pton(AF_INET, s, ip) == 1    ? AF_INET
+           : inet_pton(AF_INET6, s, ip) == 1 ? AF_INET6
+                                             : 0;
+  return af && inet_ntop(af, ip, out, (socklen_t)n) ? 0 : -1;
+}
+
 /* The client of a request: the peer's address, or, when the peer is a
  * trusted proxy, the first address of X-Forwarded-For (the one the first
  * proxy saw), if it is an address. */
@@ -323,17 +331,13 @@ static void client_of(const struct srv_daemon *d, struct MHD_Connection *c,
   if (!xff)
     return;
   char first[SRV_CLIENT_KEY];
-  unsigned char ip[16];
   xff += strspn(xff, " \t");
   size_t n = strcspn(xff, ", \t");
   if (n == 0 || n >= sizeof first)
     return;
   memcpy(first, xff, n);
   first[n] = 0;
-  if (inet_pton(AF_INET, first, ip) == 1)
-    inet_ntop(AF_INET, ip, r->key, sizeof r->key);
-  else if (inet_pton(AF_INET6, first, ip) == 1)
-    inet_ntop(AF_INET6, ip, r->key, sizeof r->key);
+  srv_address_text(first, r->key, sizeof r->key); /* the peer if not */
 }
 
 static int is_json_type(const char *ct) {

@@ -2,7 +2,6 @@
  * main.c: stickslipd's flags, environment and signals.
  */
 #define _GNU_SOURCE
-#include <arpa/inet.h>
 #include <errno.h>
 #include <jansson.h>
 #include <pthread.h>
@@ -64,7 +63,6 @@ static const flag FLAGS[] = {
     {"--memory-budget", F_SIZE, 1, 1 << 20, CFG(memory_mb),
      "MiB that request bodies and answers in flight may hold; new work "
      "over it gets 503"},
-
 };
 #define N_FLAGS (sizeof FLAGS / sizeof FLAGS[0])
 
@@ -203,21 +201,19 @@ static int configure(srv_config *cfg, int argc, char **argv) {
       fprintf(stderr, "stickslipd: --bind needs an address\n");
       return 2;
     } else if (!strcmp(a, "--trusted-proxy")) {
-      unsigned char ip[16];
-      if (!v ||
-          (inet_pton(AF_INET, v, ip) != 1 && inet_pton(AF_INET6, v, ip) != 1)) {
-        fprintf(stderr, "stickslipd: --trusted-proxy needs an IPv4 or IPv6 "
-                        "address\n");
-        return 2;
-      }
       if (cfg->n_trusted == SRV_MAX_PROXIES) {
         fprintf(stderr, "stickslipd: at most %d --trusted-proxy\n",
                 SRV_MAX_PROXIES);
         return 2;
       }
-      /* the text as inet_ntop writes it, as the peer's key is written */
-      char *t = cfg->trusted[cfg->n_trusted++];
-      inet_ntop(strchr(v, ':') ? AF_INET6 : AF_INET, ip, t, 48);
+      /* kept as the peer's address is written, so that they compare */
+      if (!v || srv_address_text(v, cfg->trusted[cfg->n_trusted],
+                                 sizeof cfg->trusted[0])) {
+        fprintf(stderr, "stickslipd: --trusted-proxy needs an IPv4 or IPv6 "
+                        "address\n");
+        return 2;
+      }
+      cfg->n_trusted++;
       i++;
     } else {
       fprintf(stderr, "stickslipd: unknown option %s (see --help)\n", a);

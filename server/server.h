@@ -116,6 +116,10 @@ struct srv_daemon *srv_start(const srv_config *cfg);
 struct sockaddr;
 int srv_add_connection(struct srv_daemon *d, int fd,
                        const struct sockaddr *addr, unsigned addrlen);
+/** The text of the IPv4 or IPv6 address @a s as the daemon writes a
+ *  client's address (inet_ntop), into @a out; 0, or -1 when @a s is not
+ *  an address. */
+int srv_address_text(const char *s, char *out, size_t n);
 /** Stop accepting, let requests in flight finish (up to cfg->drain s), stop. */
 void srv_stop(struct srv_daemon *d);
 

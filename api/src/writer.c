@@ -106,7 +106,7 @@ void api__w_real(api_wbuf *b, double v) {
 json_t *api__lazy(const api_call *c, size_t n, api_item_fn *item, const void *a,
                   const void *b, int k, size_t held) {
   api_lazies *lz = c->lazy;
-  if (!lz) /* no registry: an ordinary array */
+  if (!lz) /* api_handle always gives one */
     return NULL;
   if (lz->n == lz->cap) {
     size_t cap = lz->cap ? 2 * lz->cap : 16;
