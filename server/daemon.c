@@ -93,6 +93,7 @@ typedef struct req {
   char path[96];
   char key[SRV_CLIENT_KEY]; /* the client, for the pool's queues */
   api_response ar;
+  struct batch *batch; /* a POST /batch being answered */
   /* An answer decided on the first call, sent on a later one: libmicrohttpd
    * handles a response queued during the first call of a request far more
    * slowly (about 200 us each, serialised), so only what must stop a body
@@ -241,6 +242,26 @@ static void budget_problem(struct srv_daemon *d, api_response *ar) {
 
 static void job_queued(srv_job *j) { MHD_suspend_connection(((req *)j)->c); }
 
+/* Whether the peer of socket @a fd has closed its end: a read that finds
+ * the end of the stream (or a reset) says so; pending bytes (a pipelined
+ * request) or nothing to read say it is still there. */
+static int fd_closed(int fd) {
+  char b;
+  if (fd < 0)
+    return 0;
+  ssize_t k = recv(fd, &b, 1, MSG_PEEK | MSG_DONTWAIT);
+  return k == 0 ||
+         (k < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
+}
+
+/* Has the client of a suspended request gone away?  While a connection is
+ * suspended libmicrohttpd does not look at its socket, so the monitor asks
+ * here. */
+static int job_gone(srv_job *j) {
+  req *r = (req *)j;
+  return r->cn && fd_closed(r->cn->fd);
+}
+
 /* The memory budget is checked again when the work starts: what was
  * queued while it was free may find it spent. */
 static void job_run(srv_job *j) {
@@ -277,6 +298,9 @@ static void job_done(srv_job *j) {
   MHD_resume_connection(r->c);
 }
 
+static const srv_job_ops REQUEST_JOB = {job_queued, job_run, job_done,
+                                        job_gone};
+
 /* The body is in: queue the computation, or refuse it at once. */
 static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
                               req *r) {
@@ -288,6 +312,7 @@ static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
     budget_problem(d, &ar);
     return send_api(c, r, &ar, NULL);
   }
+  r->job.ops = &REQUEST_JOB;
   int rc = srv_pool_submit(d->pool, &r->job, r->key);
   if (rc == 0)
     return MHD_YES; /* suspended by job_queued; resumed by job_done */
@@ -303,6 +328,355 @@ static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
   return send_problem(
       c, r, rc == SRV_POOL_NOMEM ? API_P_OUT_OF_MEMORY : API_P_SHUTTING_DOWN,
       "the computation could not be queued", NULL, 0, NULL);
+}
+
+/* ---- POST /batch ---------------------------------------------------------
+ *
+ * A batch's answer is one chunked response whose lines are written as its
+ * items are done.  Its items are jobs of the pool like any request, in the
+ * queue of the batch's client; at most batch_parallel of them are in flight
+ * (queued, running, or done with a line not yet wholly written), so a
+ * batch holds at most that many answers, and its client's other requests
+ * still get their turn.  When no line is ready the response's reader
+ * suspends the connection, and the next item done resumes it.  When the
+ * client goes away the items that wait are dropped and the one that runs
+ * is told to stop, as for any request.
+ */
+
+typedef struct bitem {
+  srv_job job; /* first: a job is its item */
+  struct batch *b;
+  size_t i;
+  api_response ar;
+  struct bitem *next; /* in the batch's list of items done */
+} bitem;
+
+typedef struct batch {
+  pthread_mutex_t mu;
+  struct srv_daemon *d;
+  struct MHD_Connection *c; /* NULL once the request has completed */
+  api_batch *ab;
+  char key[SRV_CLIENT_KEY];
+  atomic_int fd;   /* of the connection; -1 once it has completed */
+  atomic_int gone; /* the client went away: no more items */
+  size_t n, next;  /* items, and the next one to send to the pool */
+  size_t in_flight, in_pool;
+  size_t ok, failed;
+  bitem *ready, *ready_tail; /* done, in the order they were done */
+  api_stream *line;          /* the line being written */
+  long line_held;
+  char *last; /* the last line, once every item's line is written */
+  size_t last_len, last_off;
+  int waiting; /* the connection is suspended until a line is ready */
+  int refs;    /* the response, and each item in the pool */
+  long held;   /* bytes counted against the memory budget */
+  double t0;
+} batch;
+
+static void batch_hold(batch *b, long bytes) {
+  b->held += bytes;
+  srv_metrics_held(b->d->metrics, bytes);
+}
+
+static void batch_free(batch *b) {
+  while (b->ready) {
+    bitem *it = b->ready;
+    b->ready = it->next;
+    api_response_free(&it->ar);
+    free(it);
+  }
+  api_stream_free(b->line);
+  free(b->last);
+  api_batch_free(b->ab);
+  srv_metrics_held(b->d->metrics, -b->held);
+  pthread_mutex_destroy(&b->mu);
+  free(b);
+}
+
+static int batch_gone(batch *b) {
+  return atomic_load(&b->gone) || fd_closed(atomic_load(&b->fd));
+}
+
+static int item_gone(srv_job *j) { return batch_gone(((bitem *)j)->b); }
+
+/* An item's answer is in: to the list of lines to write (under b->mu). */
+static void item_ready(batch *b, bitem *it) {
+  it->next = NULL;
+  if (b->ready_tail)
+    b->ready_tail->next = it;
+  else
+    b->ready = it;
+  b->ready_tail = it;
+}
+
+static void item_run(srv_job *j) {
+  bitem *it = (bitem *)j;
+  batch *b = it->b;
+  struct srv_daemon *d = b->d;
+  if (over_budget(d)) {
+    budget_problem(d, &it->ar);
+  } else {
+    api_server_info info = {now() - d->started,
+                            srv_metrics_in_flight(d->metrics, 0),
+                            d->transport,
+                            metrics_text,
+                            d,
+                            job_cancelled,
+                            &it->job,
+                            d->cfg.stream_above};
+    api_batch_run(b->ab, it->i, &d->cfg.lim, &info, &it->ar);
+  }
+  pthread_mutex_lock(&b->mu);
+  batch_hold(b, (long)it->ar.held);
+  pthread_mutex_unlock(&b->mu);
+}
+
+static void dispatch(batch *b);
+
+static void item_done(srv_job *j) {
+  bitem *it = (bitem *)j;
+  batch *b = it->b;
+  pthread_mutex_lock(&b->mu);
+  b->in_pool--;
+  b->refs--;
+  if (j->state == SRV_JOB_CANCELLED && batch_gone(b)) {
+    atomic_store(&b->gone, 1);
+    srv_metrics_cancelled(b->d->metrics);
+    batch_hold(b, -(long)it->ar.held);
+    api_response_free(&it->ar);
+    free(it);
+    b->in_flight--;
+  } else {
+    if (j->state == SRV_JOB_REFUSED)
+      api_problem(&it->ar, API_P_SHUTTING_DOWN,
+                  "the server is shutting down; retry on another replica or "
+                  "later",
+                  NULL, NULL, 0);
+    item_ready(b, it);
+    dispatch(b);
+  }
+  if (b->waiting && b->c) {
+    b->waiting = 0;
+    MHD_resume_connection(b->c);
+  }
+  int last = b->refs == 0;
+  pthread_mutex_unlock(&b->mu);
+  if (last)
+    batch_free(b);
+}
+
+static const srv_job_ops ITEM_JOB = {NULL, item_run, item_done, item_gone};
+
+/* An item answered at once, without the pool (under b->mu). */
+static void item_now(batch *b, bitem *it, api_problem_kind kind,
+                     const char *detail) {
+  api_problem(&it->ar, kind, detail, NULL, NULL, 0);
+  item_ready(b, it);
+}
+
+/* Send items to the pool while fewer than batch_parallel are in flight
+ * (under b->mu).  When the client's queue is full or the memory budget is
+ * spent, wait for an item in flight to finish; with none in flight, the
+ * item is answered 503 as a request would be. */
+static void dispatch(batch *b) {
+  struct srv_daemon *d = b->d;
+  while (!atomic_load(&b->gone) && b->next < b->n &&
+         b->in_flight < d->cfg.batch_parallel) {
+    bitem *it = calloc(1, sizeof *it);
+    if (!it)
+      return; /* a line written or an item done will try again */
+    it->b = b;
+    it->i = b->next;
+    it->job.ops = &ITEM_JOB;
+    int rc;
+    if (atomic_load(&d->draining)) {
+      item_now(b, it, API_P_SHUTTING_DOWN, "the server is shutting down");
+    } else if (over_budget(d)) {
+      if (b->in_flight > 0) {
+        free(it);
+        return;
+      }
+      budget_problem(d, &it->ar);
+      item_ready(b, it);
+    } else if ((rc = srv_pool_submit(d->pool, &it->job, b->key)) != 0) {
+      if (rc == SRV_POOL_FULL && b->in_flight > 0) {
+        free(it);
+        return;
+      }
+      if (rc == SRV_POOL_FULL)
+        srv_metrics_busy(d->metrics);
+      item_now(b, it,
+               rc == SRV_POOL_FULL    ? API_P_OVERLOADED
+               : rc == SRV_POOL_NOMEM ? API_P_OUT_OF_MEMORY
+                                      : API_P_SHUTTING_DOWN,
+               rc == SRV_POOL_FULL ? "this client's queue is full; retry "
+                                     "the item after a second"
+                                   : "the item could not be queued");
+    } else {
+      b->in_pool++;
+      b->refs++;
+    }
+    b->next++;
+    b->in_flight++;
+  }
+}
+
+/* The next line to write, into b->line or b->last (under b->mu); 0 when
+ * there is none yet, -1 when out of memory. */
+static int next_line(batch *b) {
+  if (b->ready) {
+    bitem *it = b->ready;
+    if (!(b->ready = it->next))
+      b->ready_tail = NULL;
+    if (it->ar.status == 200)
+      b->ok++;
+    else
+      b->failed++;
+    size_t held;
+    long answer = (long)it->ar.held;
+    b->line = api_batch_line(b->ab, it->i, &it->ar, &held);
+    free(it);
+    batch_hold(b, (long)held - answer);
+    b->line_held = (long)held;
+    return b->line ? 1 : -1;
+  }
+  if (b->next == b->n && b->in_flight == 0 && !b->last) {
+    api_response done;
+    api_batch_done(b->ok, b->failed, now() - b->t0, &done);
+    b->last = done.body;
+    b->last_len = done.len;
+    return b->last ? 1 : -1;
+  }
+  return 0;
+}
+
+/* The reader of a batch's response, on the I/O thread. */
+static ssize_t batch_read(void *cls, uint64_t pos, char *buf, size_t max) {
+  batch *b = cls;
+  size_t got = 0;
+  (void)pos;
+  pthread_mutex_lock(&b->mu);
+  if (atomic_load(&b->gone)) {
+    pthread_mutex_unlock(&b->mu);
+    return MHD_CONTENT_READER_END_WITH_ERROR;
+  }
+  while (got < max) {
+    if (b->line) {
+      long k = api_stream_read(b->line, buf + got, max - got);
+      if (k < 0)
+        break;
+      got += (size_t)k;
+      if (got == max)
+        break; /* the line may go on */
+      api_stream_free(b->line);
+      b->line = NULL;
+      batch_hold(b, -b->line_held);
+      b->in_flight--;
+      continue;
+    }
+    if (b->last) {
+      size_t k = b->last_len - b->last_off;
+      k = k < max - got ? k : max - got;
+      memcpy(buf + got, b->last + b->last_off, k);
+      b->last_off += k;
+      got += k;
+      break;
+    }
+    dispatch(b);
+    int rc = next_line(b);
+    if (rc < 0) {
+      pthread_mutex_unlock(&b->mu);
+      return MHD_CONTENT_READER_END_WITH_ERROR;
+    }
+    if (rc == 0)
+      break;
+  }
+  ssize_t ret = (ssize_t)got;
+  if (got == 0 && b->last)
+    ret = MHD_CONTENT_READER_END_OF_STREAM;
+  else if (got == 0) {
+    /* nothing to write until an item is done: item_done resumes */
+    b->waiting = 1;
+    MHD_suspend_connection(b->c);
+  }
+  pthread_mutex_unlock(&b->mu);
+  return ret;
+}
+
+/* The response is done with the batch. */
+static void batch_release(void *cls) {
+  batch *b = cls;
+  pthread_mutex_lock(&b->mu);
+  int last = --b->refs == 0;
+  pthread_mutex_unlock(&b->mu);
+  if (last)
+    batch_free(b);
+}
+
+/* The request of a batch has completed (answered, or its client gone):
+ * what is still in the pool stops, and nothing more is sent there. */
+static void batch_detach(batch *b) {
+  pthread_mutex_lock(&b->mu);
+  atomic_store(&b->gone, 1);
+  atomic_store(&b->fd, -1);
+  b->c = NULL;
+  pthread_mutex_unlock(&b->mu);
+}
+
+/* The body of a POST /batch is in: check it, and start the answer. */
+static enum MHD_Result batch_start(struct srv_daemon *d,
+                                   struct MHD_Connection *c, req *r) {
+  if (atomic_load(&d->draining))
+    return send_problem(c, r, API_P_SHUTTING_DOWN,
+                        "the server is shutting down", NULL, 0, NULL);
+  if (r->over_budget || over_budget(d)) {
+    api_response ar;
+    budget_problem(d, &ar);
+    return send_api(c, r, &ar, NULL);
+  }
+  api_response ar;
+  api_batch *ab;
+  if (api_batch_open(r->buf, r->len, &d->cfg.lim, &ab, &ar) != 0)
+    return send_api(c, r, &ar, NULL);
+  batch *b = calloc(1, sizeof *b);
+  if (!b) {
+    api_batch_free(ab);
+    return send_problem(c, r, API_P_OUT_OF_MEMORY, "out of memory", NULL, 0,
+                        NULL);
+  }
+  pthread_mutex_init(&b->mu, NULL);
+  b->d = d;
+  b->c = c;
+  b->ab = ab;
+  b->n = api_batch_size(ab);
+  snprintf(b->key, sizeof b->key, "%s", r->key);
+  atomic_store(&b->fd, r->cn ? r->cn->fd : -1);
+  b->refs = 1; /* the response */
+  b->t0 = r->t0;
+  batch_hold(b, (long)api_batch_held(ab));
+  /* the items keep their own copies of their bodies */
+  free(r->buf);
+  r->buf = NULL;
+  hold(d, r, -(long)r->len);
+  r->len = r->cap = 0;
+  struct MHD_Response *resp = MHD_create_response_from_callback(
+      MHD_SIZE_UNKNOWN, STREAM_CHUNK, batch_read, b, batch_release);
+  if (!resp) {
+    batch_free(b);
+    return MHD_NO;
+  }
+  MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
+                          "application/x-ndjson");
+  MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+  r->batch = b;
+  pthread_mutex_lock(&b->mu);
+  dispatch(b);
+  pthread_mutex_unlock(&b->mu);
+  enum MHD_Result ok = MHD_queue_response(c, MHD_HTTP_OK, resp);
+  MHD_destroy_response(resp);
+  r->status = MHD_HTTP_OK;
+  r->done = 1;
+  return ok;
 }
 
 /* ---- headers ------------------------------------------------------------- */
@@ -528,6 +902,8 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
     handle(d, r, &ar);
     return send_api(c, r, &ar, NULL);
   }
+  if (api_endpoint_at(r->ep)->run_class == API_RUN_BATCH)
+    return batch_start(d, c, r);
   return submit(d, c, r);
 }
 
@@ -553,6 +929,8 @@ static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
     r->cn->receiving = 1;
     pthread_mutex_unlock(&d->mu);
   }
+  if (r->batch)
+    batch_detach(r->batch);
   srv_metrics_held(d->metrics, -r->held);
   api_response_free(&r->ar);
   free(r->buf);
@@ -612,19 +990,6 @@ static void connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
   *socket_ctx = NULL;
 }
 
-/* Has the peer of a suspended request closed its end?  A read that finds
- * the end of the stream (or a reset) says so; pending bytes (a pipelined
- * request) or nothing to read say it is still there. */
-static int peer_gone(srv_job *j) {
-  req *r = (req *)j;
-  char b;
-  if (!r->cn)
-    return 0;
-  ssize_t k = recv(r->cn->fd, &b, 1, MSG_PEEK | MSG_DONTWAIT);
-  return k == 0 ||
-         (k < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
-}
-
 /* Close the connections that are past their deadline for a request. */
 static void reap_slow(struct srv_daemon *d) {
   double t = now();
@@ -642,7 +1007,7 @@ static void *monitor(void *arg) {
   struct srv_daemon *d = arg;
   struct timespec ts = {0, MONITOR_MS * 1000000L};
   while (!atomic_load(&d->monitor_stop)) {
-    srv_pool_watch(d->pool, peer_gone);
+    srv_pool_watch(d->pool);
     reap_slow(d);
     nanosleep(&ts, NULL);
   }
@@ -715,11 +1080,11 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     return NULL;
   pthread_mutex_init(&d->mu, NULL);
   d->cfg = *cfg;
+  if (d->cfg.batch_parallel == 0)
+    d->cfg.batch_parallel = d->cfg.workers ? d->cfg.workers : 1;
   d->started = now();
   snprintf(d->transport, sizeof d->transport, "%s", MHD_get_version());
-  srv_pool_cfg pc = {cfg->workers,      cfg->client_workers,
-                     cfg->client_queue, job_queued,
-                     job_run,           job_done};
+  srv_pool_cfg pc = {cfg->workers, cfg->client_workers, cfg->client_queue};
   if (!(d->metrics = srv_metrics_new()) || !(d->pool = srv_pool_new(&pc))) {
     daemon_free(d);
     return NULL;

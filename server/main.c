@@ -44,6 +44,10 @@ static const flag FLAGS[] = {
     {"--max-orbits", F_INT, 1, 1024, CFG(lim.max_orbits),
      "orbits in one /orbit response"},
     {"--max-depth", F_INT, 2, 2048, CFG(lim.max_depth), "JSON nesting depth"},
+    {"--max-batch-items", F_SIZE, 1, 1e7, CFG(lim.max_batch_items),
+     "requests in one /batch"},
+    {"--batch-parallel", F_UNSIGNED, 1, 1024, CFG(batch_parallel),
+     "items of one /batch in flight at once (default: workers)"},
     {"--workers", F_UNSIGNED, 1, 1024, CFG(workers),
      "computations at once (default: the number of cores)"},
     {"--client-workers", F_UNSIGNED, 1, 1024, CFG(client_workers),
@@ -231,6 +235,8 @@ int main(int argc, char **argv) {
     return rc < 0 ? 0 : rc;
   if (cfg.client_workers == 0) /* another client always finds a worker */
     cfg.client_workers = cfg.workers > 1 ? cfg.workers - 1 : 1;
+  if (cfg.batch_parallel == 0)
+    cfg.batch_parallel = cfg.workers;
   /* Before any thread exists: GSL must not abort, jansson's hash seed is
    * set once, and every thread inherits a mask that blocks the signals the
    * main thread waits for. */

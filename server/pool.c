@@ -130,7 +130,7 @@ static void *worker(void *arg) {
     j->state = SRV_JOB_RUNNING;
     pthread_mutex_unlock(&p->mu);
     if (!atomic_load(&j->cancel))
-      p->cfg.run(j);
+      j->ops->run(j);
     pthread_mutex_lock(&p->mu);
     client *c = j->owner;
     c->running--;
@@ -142,7 +142,7 @@ static void *worker(void *arg) {
     pthread_cond_broadcast(&p->work);
     pthread_cond_broadcast(&p->idle);
     pthread_mutex_unlock(&p->mu);
-    p->cfg.done(j); /* the job's owner may free it from here on */
+    j->ops->done(j); /* the job's owner may free it from here on */
     pthread_mutex_lock(&p->mu);
   }
   pthread_mutex_unlock(&p->mu);
@@ -207,26 +207,22 @@ int srv_pool_submit(srv_pool *p, srv_job *j, const char *key) {
     if (p->all)
       p->all->all_prev = j;
     p->all = j;
-    if (p->cfg.on_queued)
-      p->cfg.on_queued(j); /* still under the lock: before any worker */
+    if (j->ops->queued)
+      j->ops->queued(j); /* still under the lock: before any worker */
     pthread_cond_signal(&p->work);
   }
   pthread_mutex_unlock(&p->mu);
   return rc;
 }
 
-/* Take every waiting job for which @a drop says so (all when NULL) out of
- * the pool; they are handed to done() after the lock is released. */
-typedef struct dropper {
-  int (*drop)(srv_job *);
-} dropper;
-
-static void drop_waiting(srv_pool *p, const dropper *dr, int state) {
+/* Take every waiting job for which @a gone says so (all when @a all) out
+ * of the pool; they are handed to done() after the lock is released. */
+static void drop_waiting(srv_pool *p, int all, int state) {
   srv_job *out = NULL;
   pthread_mutex_lock(&p->mu);
   for (srv_job *j = p->all, *nx; j; j = nx) {
     nx = j->all_next;
-    if (j->state != SRV_JOB_WAITING || (dr && !dr->drop(j)))
+    if (j->state != SRV_JOB_WAITING || (!all && !j->ops->gone(j)))
       continue;
     client *c = j->owner;
     dequeue(p, j);
@@ -239,23 +235,23 @@ static void drop_waiting(srv_pool *p, const dropper *dr, int state) {
   pthread_mutex_unlock(&p->mu);
   for (srv_job *j = out, *nx; j; j = nx) {
     nx = j->next;
-    p->cfg.done(j);
+    j->ops->done(j);
   }
 }
 
-void srv_pool_watch(srv_pool *p, int (*gone)(srv_job *)) {
-  dropper dr = {gone};
+void srv_pool_watch(srv_pool *p) {
   /* running jobs: the flag is enough, the core polls it */
   pthread_mutex_lock(&p->mu);
   for (srv_job *j = p->all; j; j = j->all_next)
-    if (j->state == SRV_JOB_RUNNING && !atomic_load(&j->cancel) && gone(j))
+    if (j->state == SRV_JOB_RUNNING && !atomic_load(&j->cancel) &&
+        j->ops->gone(j))
       atomic_store(&j->cancel, 1);
   pthread_mutex_unlock(&p->mu);
   /* waiting jobs: dropped at once */
-  drop_waiting(p, &dr, SRV_JOB_CANCELLED);
+  drop_waiting(p, 0, SRV_JOB_CANCELLED);
 }
 
-void srv_pool_drain(srv_pool *p) { drop_waiting(p, NULL, SRV_JOB_REFUSED); }
+void srv_pool_drain(srv_pool *p) { drop_waiting(p, 1, SRV_JOB_REFUSED); }
 
 void srv_pool_cancel_all(srv_pool *p) {
   pthread_mutex_lock(&p->mu);

@@ -26,6 +26,8 @@ typedef struct srv_config {
   double drain;            /**< --drain seconds at shutdown (15) */
   size_t memory_mb;        /**< --memory-budget, MiB (256) */
   size_t stream_above;     /**< answers larger than this are streamed */
+  unsigned batch_parallel; /**< --batch-parallel: items of a batch in
+                                flight at once (workers) */
   int quiet;               /**< --quiet: no access log */
   /** --trusted-proxy (repeatable): peers whose X-Forwarded-For names the
    *  client, for the per-client queues */
@@ -45,22 +47,32 @@ enum {
   SRV_JOB_REFUSED    /* still waiting when the daemon shut down */
 };
 
-/* A unit of work, embedded in the request it computes. */
-typedef struct srv_job {
+typedef struct srv_job srv_job;
+
+/* What the pool does with a kind of job (a request, an item of a batch). */
+typedef struct srv_job_ops {
+  void (*queued)(srv_job *); /* under the lock, before any worker sees it;
+                                NULL: nothing */
+  void (*run)(srv_job *);    /* on a worker */
+  void (*done)(srv_job *);   /* after it ran, or was dropped; no lock held */
+  int (*gone)(srv_job *);    /* whether its client has gone away (polled by
+                                srv_pool_watch under the pool's lock) */
+} srv_job_ops;
+
+/* A unit of work, embedded in what it computes. */
+struct srv_job {
+  const srv_job_ops *ops;
   atomic_int cancel;    /* set when the client is gone; the core polls it */
   int state;            /* SRV_JOB_*, under the pool's lock */
   struct srv_job *next; /* in its client's queue */
   struct srv_job *all_prev, *all_next; /* waiting or running */
   void *owner;                         /* its client */
-} srv_job;
+};
 
 typedef struct srv_pool_cfg {
-  unsigned workers;             /* threads */
-  unsigned client_workers;      /* jobs of one client running at once */
-  unsigned client_queue;        /* jobs of one client waiting */
-  void (*on_queued)(srv_job *); /* under the lock, before any worker sees it */
-  void (*run)(srv_job *);       /* on a worker */
-  void (*done)(srv_job *);      /* after it ran, or was dropped; no lock held */
+  unsigned workers;        /* threads */
+  unsigned client_workers; /* jobs of one client running at once */
+  unsigned client_queue;   /* jobs of one client waiting */
 } srv_pool_cfg;
 
 typedef struct srv_pool srv_pool;
@@ -71,9 +83,9 @@ srv_pool *srv_pool_new(const srv_pool_cfg *cfg); /* NULL on failure */
 /* Queue @a j for the client @a key: 0, or SRV_POOL_FULL (that client's
  * queue is full), SRV_POOL_CLOSED, SRV_POOL_NOMEM. */
 int srv_pool_submit(srv_pool *p, srv_job *j, const char *key);
-/* Flag the running jobs whose client @a gone says is gone, and drop the
+/* Flag the running jobs whose client is gone (ops->gone), and drop the
  * waiting ones (done() with SRV_JOB_CANCELLED). */
-void srv_pool_watch(srv_pool *p, int (*gone)(srv_job *));
+void srv_pool_watch(srv_pool *p);
 /* Drop every waiting job (done() with SRV_JOB_REFUSED). */
 void srv_pool_drain(srv_pool *p);
 /* Flag every job to stop. */

@@ -23,14 +23,15 @@ extern "C" {
 
 /** Per-request limits; api_limits_default() gives the documented defaults. */
 typedef struct api_limits {
-  size_t max_body;       /**< request body bytes (server enforces) */
-  size_t max_samples;    /**< samples in one response */
-  size_t max_events;     /**< events computed by one /simulate */
-  size_t max_event_list; /**< events listed in one response */
-  double max_horizon;    /**< t_end - t0, dimensionless time */
-  double max_seconds;    /**< compute time of one request */
-  int max_orbits;        /**< orbits in one /orbit response */
-  int max_depth;         /**< JSON nesting depth */
+  size_t max_body;        /**< request body bytes (server enforces) */
+  size_t max_samples;     /**< samples in one response */
+  size_t max_events;      /**< events computed by one /simulate */
+  size_t max_event_list;  /**< events listed in one response */
+  double max_horizon;     /**< t_end - t0, dimensionless time */
+  double max_seconds;     /**< compute time of one request */
+  int max_orbits;         /**< orbits in one /orbit response */
+  int max_depth;          /**< JSON nesting depth */
+  size_t max_batch_items; /**< requests in one /batch */
 } api_limits;
 
 /** Fill @a l with the defaults documented in the README. */
@@ -73,7 +74,11 @@ typedef enum api_run_class {
   API_RUN_INLINE = 0,
   /** A POST whose JSON body asks for a computation: it takes a compute
    *  slot, and the computation is bounded by api_limits.max_seconds. */
-  API_RUN_COMPUTE = 1
+  API_RUN_COMPUTE = 1,
+  /** A POST whose JSON body lists computations (POST /batch): a server
+   *  runs them one by one (api_batch_open and the functions after it);
+   *  api_handle runs them in order and answers the whole NDJSON text. */
+  API_RUN_BATCH = 2
 } api_run_class;
 
 /** The public view of one row of the endpoint table (api/src/endpoints.h). */
@@ -127,6 +132,45 @@ typedef struct api_server_info {
 int api_handle(size_t index, const char *body, size_t len,
                const api_limits *lim, const api_server_info *srv,
                api_response *out);
+
+/* ------------------------------------------------------------------------ */
+/* Batches (POST /batch)                                                     */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * A batch is {"requests": [{"id": ..., "path": "/orbit", "body": {...}},
+ * ...]}.  Its answer is NDJSON (application/x-ndjson): one line
+ *   {"id": ..., "index": i, "status": S, "body": {...}}
+ * per item, in the order the items are done, and a last line
+ *   {"done": true, "ok": N, "failed": M, "seconds": S}.
+ * An item that is not well formed (no such path, no body) is answered by
+ * its own line with its problem; the others go on.  A problem's pointer in
+ * an item's line is relative to the item ("/path", "/body/params/chi").
+ */
+typedef struct api_batch api_batch;
+
+/** Parse and check a batch.  0 and *b; or -1, *b NULL, and the problem in
+ *  @a out (the batch as a whole is refused). */
+int api_batch_open(const char *body, size_t len, const api_limits *lim,
+                   api_batch **b, api_response *out);
+/** The number of items. */
+size_t api_batch_size(const api_batch *b);
+/** The bytes the batch keeps until it is freed (its items' bodies). */
+size_t api_batch_held(const api_batch *b);
+/** Serve item @a i: its answer, or its problem, in @a out (as api_handle;
+ *  thread-safe for distinct items).  Returns out->status. */
+int api_batch_run(api_batch *b, size_t i, const api_limits *lim,
+                  const api_server_info *srv, api_response *out);
+/** The line of item @a i, whose answer is @a item (consumed, whatever
+ *  happens; made by api_batch_run or api_problem), as a stream that ends
+ *  with a newline.  *held: the bytes it keeps.  NULL when out of memory. */
+api_stream *api_batch_line(const api_batch *b, size_t i, api_response *item,
+                           size_t *held);
+/** The last line (a body, malloc'd, in @a out). */
+void api_batch_done(size_t ok, size_t failed, double seconds,
+                    api_response *out);
+/** Free a batch; NULL-safe. */
+void api_batch_free(api_batch *b);
 
 /* ------------------------------------------------------------------------ */
 /* Problems                                                                  */

@@ -314,6 +314,24 @@ void api__lazies_free(api_lazies *lz);
 int api__json_response(json_t *j, const api_call *c, api_response *out);
 void api__stream_own(api_stream *s, void *x, void (*release)(void *));
 
+/* A stream of @a head (malloc'd, consumed), the answer @a r (consumed: its
+ * body, or its stream read as it goes) and @a tail (copied); NULL when out
+ * of memory (everything given is freed). */
+api_stream *api__stream_wrap(char *head, size_t head_len, api_response *r,
+                             const char *tail);
+
+/* A request body as a JSON object (nesting depth at most lim->max_depth,
+ * no duplicate keys), or NULL with the problem in @a e. */
+json_t *api__parse(const char *body, size_t len, const api_limits *lim,
+                   api_err *e);
+
+/* Serve endpoint @a index as api_handle does; a problem's pointer, when it
+ * names a field, is prefixed by @a prefix (NULL: none), for an answer read
+ * as part of a larger document (an item of a batch). */
+int api__handle(size_t index, const char *body, size_t len,
+                const api_limits *lim, const api_server_info *srv,
+                api_response *out, const char *prefix);
+
 /* The compact text of @a j (malloc'd, NUL-terminated, length in *len), with
  * reals in the shortest of 15-17 significant digits that reads back exactly;
  * NULL when out of memory.  Strings must be valid UTF-8 (jansson's own). */

@@ -3,6 +3,7 @@
  * as parse -> decode -> run -> encode.
  */
 #define _POSIX_C_SOURCE 200809L
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -55,6 +56,7 @@ void api_limits_default(api_limits *l) {
   l->max_seconds = 10;
   l->max_orbits = 32;
   l->max_depth = 32;
+  l->max_batch_items = 10000;
 }
 
 const char *api_version(void) { return SS_VERSION; }
@@ -82,9 +84,8 @@ static int too_deep(const char *s, size_t n, int max) {
   return 0;
 }
 
-/* The body as a JSON object, or NULL with the problem in e. */
-static json_t *parse(const char *body, size_t len, const api_limits *lim,
-                     api_err *e) {
+json_t *api__parse(const char *body, size_t len, const api_limits *lim,
+                   api_err *e) {
   json_error_t jerr;
   json_t *root;
   if (len == 0) {
@@ -122,6 +123,12 @@ static double now(void) {
 int api_handle(size_t index, const char *body, size_t len,
                const api_limits *lim, const api_server_info *srv,
                api_response *out) {
+  return api__handle(index, body, len, lim, srv, out, NULL);
+}
+
+int api__handle(size_t index, const char *body, size_t len,
+                const api_limits *lim, const api_server_info *srv,
+                api_response *out, const char *prefix) {
   api_err e;
   api_lazies lz = {NULL, 0, 0, 0};
   api_call c = {lim, srv, &e, &lz};
@@ -135,8 +142,8 @@ int api_handle(size_t index, const char *body, size_t len,
     return out->status;
   }
   const ep_row *ep = &ENDPOINTS[index];
-  if (ep->pub.run_class == API_RUN_COMPUTE &&
-      !(root = parse(body ? body : "", len, lim, &e))) {
+  if (ep->pub.run_class != API_RUN_INLINE &&
+      !(root = api__parse(body ? body : "", len, lim, &e))) {
     api__problem_response(&e, out);
     return out->status;
   }
@@ -157,6 +164,11 @@ int api_handle(size_t index, const char *body, size_t len,
   json_decref(root);
   if (e.set) {
     api_response_free(out);
+    if (prefix && e.pointer[0]) {
+      char p[sizeof e.pointer];
+      snprintf(p, sizeof p, "%s%s", prefix, e.pointer);
+      memcpy(e.pointer, p, sizeof p);
+    }
     api__problem_response(&e, out);
   }
   return out->status;

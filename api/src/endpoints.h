@@ -37,6 +37,8 @@
   X(STABILITY, "POST", "/stability", "stability", API_RUN_COMPUTE,             \
     ep_stability_decode, ep_stability_run, ep_stability_encode,                \
     ep_stability_release)                                                      \
+  X(BATCH, "POST", "/batch", "batch", API_RUN_BATCH, ep_batch_decode,          \
+    ep_batch_run, ep_batch_encode, ep_batch_release)                           \
   X(HEALTH, "GET", "/health", "health", API_RUN_INLINE, ep_meta_decode,        \
     ep_meta_run, ep_health_encode, ep_meta_release)                            \
   X(VERSION, "GET", "/version", "version", API_RUN_INLINE, ep_meta_decode,     \

@@ -9,6 +9,7 @@
  * reads, a chunk at a time, from the endpoint's result, which the stream
  * keeps until it is freed.  Either way the bytes are the same.
  */
+#define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -235,11 +236,13 @@ char *api__dump(const json_t *j, size_t *len) {
 /* ---- streams --------------------------------------------------------------
  */
 
-/* A piece of a streamed answer: text, or a lazy array's elements. */
+/* A piece of a streamed answer: text, a lazy array's elements, or another
+ * stream (an item's answer inside a line of a batch). */
 typedef struct part {
-  char *text; /* NULL for a lazy array */
+  char *text; /* NULL for a lazy array or a stream */
   size_t len; /* of the text */
   api_lazy lazy;
+  api_stream *sub;
 } part;
 
 struct api_stream {
@@ -253,26 +256,29 @@ struct api_stream {
   void (*release)(void *);
 };
 
+/* The stream owns @a p from here on, also when out of memory. */
 static void add_part(api_stream *s, part p) {
-  if (s->oom)
-    return;
-  if (s->n == s->cap) {
+  if (s->n == s->cap && !s->oom) {
     size_t cap = s->cap ? 2 * s->cap : 8;
     part *v = realloc(s->parts, cap * sizeof *v);
-    if (!v) {
+    if (!v)
       s->oom = 1;
-      free(p.text);
-      return;
+    else {
+      s->parts = v;
+      s->cap = cap;
     }
-    s->parts = v;
-    s->cap = cap;
+  }
+  if (s->oom) {
+    free(p.text);
+    api_stream_free(p.sub);
+    return;
   }
   s->parts[s->n++] = p;
 }
 
 /* The text so far becomes a part, then the lazy array @a l. */
 static void cut(cutter *ct, api_wbuf *b, const api_lazy *l) {
-  part t = {NULL, b->len, {0}};
+  part t = {NULL, b->len, {0}, NULL};
   if (b->oom || !(t.text = malloc(b->len ? b->len : 1))) {
     ct->s->oom = 1;
     return;
@@ -280,14 +286,16 @@ static void cut(cutter *ct, api_wbuf *b, const api_lazy *l) {
   memcpy(t.text, b->p, b->len);
   b->len = 0;
   add_part(ct->s, t);
-  add_part(ct->s, (part){NULL, 0, *l});
+  add_part(ct->s, (part){NULL, 0, *l, NULL});
 }
 
 void api_stream_free(api_stream *s) {
   if (!s)
     return;
-  for (size_t i = 0; i < s->n; i++)
+  for (size_t i = 0; i < s->n; i++) {
     free(s->parts[i].text);
+    api_stream_free(s->parts[i].sub);
+  }
   free(s->parts);
   free(s->stage.p);
   if (s->release)
@@ -308,7 +316,7 @@ static api_stream *stream_of(const json_t *j, const api_lazies *lz,
   if (b.oom)
     s->oom = 1;
   else
-    add_part(s, (part){b.p, b.len, {0}});
+    add_part(s, (part){b.p, b.len, {0}, NULL});
   if (s->oom) {
     if (b.oom)
       free(b.p);
@@ -340,6 +348,17 @@ long api_stream_read(api_stream *s, char *buf, size_t max) {
     if (s->cur >= s->n)
       break;
     part *p = &s->parts[s->cur];
+    if (p->sub) {
+      long k = api_stream_read(p->sub, buf + got, max - got);
+      if (k < 0)
+        return -1;
+      got += (size_t)k;
+      if (k == 0) { /* that stream has ended */
+        s->cur++;
+        s->pos = 0;
+      }
+      continue;
+    }
     if (p->text) {
       size_t k = p->len - s->pos;
       k = k < max - got ? k : max - got;
@@ -361,6 +380,35 @@ long api_stream_read(api_stream *s, char *buf, size_t max) {
     }
   }
   return (long)got;
+}
+
+/* Text, then an answer (whole or a stream), then text: the stream of a
+ * line that wraps an answer. */
+api_stream *api__stream_wrap(char *head, size_t head_len, api_response *r,
+                             const char *tail) {
+  api_stream *s = calloc(1, sizeof *s);
+  char *t = strdup(tail);
+  if (!s || !t) {
+    free(s);
+    free(t);
+    free(head);
+    api_response_free(r);
+    return NULL;
+  }
+  add_part(s, (part){head, head_len, {0}, NULL});
+  if (r->stream)
+    add_part(s, (part){NULL, 0, {0}, r->stream});
+  else
+    add_part(s, (part){r->body, r->len, {0}, NULL});
+  add_part(s, (part){t, strlen(t), {0}, NULL});
+  r->stream = NULL;
+  r->body = NULL;
+  api_response_free(r);
+  if (s->oom) {
+    api_stream_free(s);
+    return NULL;
+  }
+  return s;
 }
 
 /* ---- the answer -----------------------------------------------------------

@@ -253,6 +253,154 @@ static void test_streams(void) {
   ASSERT_EQ_INT(compared, 15);
 }
 
+/* The text of stream @a s read in pieces of @a step bytes (malloc'd); the
+ * stream is freed. */
+static char *read_all(api_stream *s, size_t step) {
+  size_t cap = 256, len = 0;
+  char *out = malloc(cap);
+  long k;
+  do {
+    if (len + step + 1 > cap)
+      out = realloc(out, cap = 2 * (len + step + 1));
+    k = api_stream_read(s, out + len, step);
+    ASSERT_TRUE(k >= 0 && (size_t)k <= step);
+    len += (size_t)(k > 0 ? k : 0);
+  } while (k > 0);
+  out[len] = 0;
+  api_stream_free(s);
+  return out;
+}
+
+/* EVIDENCE: README "Batches": an item's line carries the answer its body
+ * gets when posted alone; a bad item gets its own line, with a pointer into
+ * the item, and the others go on; the last line counts them */
+static void test_batch(void) {
+  static const char *const orbit =
+      "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,"
+      "\"V\":1},\"kind\":\"all\"}";
+  static const char *const bad_chi =
+      "{\"params\":{\"chi\":-1,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,"
+      "\"V\":1}}";
+  char body[1024];
+  snprintf(body, sizeof body,
+           "{\"requests\":[{\"id\":\"a\",\"path\":\"/orbit\",\"body\":%s},"
+           "{\"id\":2,\"path\":\"/orbit\",\"body\":%s},"
+           "{\"path\":\"/health\",\"body\":{}},"
+           "{\"id\":3,\"path\":\"/orbit\",\"body\":{},\"x\":1}]}",
+           orbit, bad_chi);
+  api_limits lim;
+  api_limits_default(&lim);
+  size_t ep, orbit_ep;
+  ASSERT_EQ_INT(api_route("POST", "/batch", &ep), 200);
+  ASSERT_EQ_INT(api_route("POST", "/orbit", &orbit_ep), 200);
+
+  /* the answer to each item alone, as its line should carry it */
+  api_response alone[2];
+  api_handle(orbit_ep, orbit, strlen(orbit), &lim, NULL, &alone[0]);
+  api_handle(orbit_ep, bad_chi, strlen(bad_chi), &lim, NULL, &alone[1]);
+  ASSERT_EQ_INT(alone[0].status, 200);
+  ASSERT_EQ_INT(alone[1].status, 422);
+
+  /* the whole answer, served in order */
+  api_response whole;
+  api_handle(ep, body, strlen(body), &lim, NULL, &whole);
+  ASSERT_EQ_INT(whole.status, 200);
+  ASSERT_TRUE(whole.content_type &&
+              !strcmp(whole.content_type, "application/x-ndjson"));
+  json_t *lines[5] = {NULL};
+  size_t nl = 0;
+  for (char *p = whole.body, *e; p && *p && nl < 5; p = e + 1) {
+    if (!(e = strchr(p, '\n')))
+      break;
+    lines[nl++] = json_loadb(p, (size_t)(e - p), 0, NULL);
+  }
+  ASSERT_EQ_INT((int)nl, 5);
+  static const struct {
+    int status;
+    const char *pointer;
+  } want[4] = {
+      {200, NULL}, {422, "/body/params/chi"}, {422, "/path"}, {422, "/x"}};
+  for (size_t i = 0; i < 4 && i < nl; i++) {
+    json_t *l = lines[i];
+    ASSERT_TRUE(json_integer_value(json_object_get(l, "index")) == (int)i);
+    ASSERT_EQ_INT((int)json_integer_value(json_object_get(l, "status")),
+                  want[i].status);
+    if (want[i].pointer) {
+      const char *ptr = json_string_value(
+          json_object_get(json_object_get(l, "body"), "pointer"));
+      ASSERT_TRUE(ptr && !strcmp(ptr, want[i].pointer));
+    }
+  }
+  ASSERT_TRUE(!strcmp(json_string_value(json_object_get(lines[0], "id")), "a"));
+  ASSERT_TRUE(json_integer_value(json_object_get(lines[1], "id")) == 2);
+  ASSERT_TRUE(json_is_null(json_object_get(lines[2], "id")));
+  /* the item's body is the answer alone, but for the pointer's prefix */
+  json_t *a0 = json_loads(alone[0].body, 0, NULL);
+  ASSERT_TRUE(json_equal(a0, json_object_get(lines[0], "body")));
+  json_decref(a0);
+  json_t *a1 = json_loads(alone[1].body, 0, NULL);
+  json_object_set_new(a1, "pointer", json_string("/body/params/chi"));
+  ASSERT_TRUE(json_equal(a1, json_object_get(lines[1], "body")));
+  json_decref(a1);
+  ASSERT_TRUE(json_is_true(json_object_get(lines[4], "done")));
+  ASSERT_TRUE(json_integer_value(json_object_get(lines[4], "ok")) == 1);
+  ASSERT_TRUE(json_integer_value(json_object_get(lines[4], "failed")) == 3);
+  for (size_t i = 0; i < nl; i++)
+    json_decref(lines[i]);
+  api_response_free(&whole);
+
+  /* item by item, as the server runs them: each line is one line of JSON,
+   * however it is read, and the batch keeps its items' bodies only */
+  api_batch *b;
+  api_response out;
+  ASSERT_EQ_INT(api_batch_open(body, strlen(body), &lim, &b, &out), 0);
+  ASSERT_TRUE(b && api_batch_size(b) == 4);
+  ASSERT_TRUE(api_batch_held(b) > strlen(orbit) + strlen(bad_chi) &&
+              api_batch_held(b) < strlen(body) + 4 * 64);
+  for (size_t step = 1; b && step <= 4096; step *= 64) {
+    api_response r;
+    size_t held = 0;
+    ASSERT_EQ_INT(api_batch_run(b, 0, &lim, NULL, &r), 200);
+    char *t = read_all(api_batch_line(b, 0, &r, &held), step);
+    ASSERT_TRUE(held >= strlen(t));
+    size_t n = strlen(t);
+    ASSERT_TRUE(n > 1 && t[n - 1] == '\n' && !memchr(t, '\n', n - 1));
+    json_t *l = json_loads(t, 0, NULL);
+    json_t *a = json_loads(alone[0].body, 0, NULL);
+    ASSERT_TRUE(json_equal(a, json_object_get(l, "body")));
+    json_decref(a);
+    json_decref(l);
+    free(t);
+  }
+  api_batch_free(b);
+  api_response_free(&alone[0]);
+  api_response_free(&alone[1]);
+
+  /* refused as a whole, with the pointer into the batch */
+  static const struct {
+    const char *body, *pointer;
+    int status;
+  } whole_bad[] = {{"{\"requests\":[]}", "/requests", 422},
+                   {"{\"requests\":{}}", "/requests", 422},
+                   {"{}", "/requests", 422},
+                   {"{\"requests\":[1],\"more\":[]}", "/more", 422},
+                   {"{\"requests\":[1,2,3]}", "/requests", 422}};
+  lim.max_batch_items = 2;
+  for (size_t i = 0; i < sizeof whole_bad / sizeof whole_bad[0]; i++) {
+    const char *bb = whole_bad[i].body;
+    ASSERT_EQ_INT(api_batch_open(bb, strlen(bb), &lim, &b, &out), -1);
+    ASSERT_TRUE(b == NULL);
+    json_t *p = json_loads(out.body, 0, NULL);
+    const char *ptr = json_string_value(json_object_get(p, "pointer"));
+    if (!ptr || strcmp(ptr, whole_bad[i].pointer) ||
+        out.status != whole_bad[i].status)
+      TEST_FAIL_("batch %s: %d %s", bb, out.status, out.body);
+    test_checks_++;
+    json_decref(p);
+    api_response_free(&out);
+  }
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     fprintf(stderr, "usage: test_endpoints CASES_DIR\n");
@@ -263,5 +411,6 @@ int main(int argc, char **argv) {
   test_problem_table();
   test_status_table();
   test_streams();
+  test_batch();
   TEST_DONE();
 }

@@ -1,0 +1,327 @@
+/*
+ * ep_batch.c: POST /batch, a list of requests to the computing endpoints.
+ *
+ * A batch is checked as a whole once (an object with "requests", an array
+ * of 1 to max_batch_items items); each item is then checked on its own, so
+ * that one bad item is answered by its own line and the others go on.  An
+ * item keeps the compact text of its body: it is served exactly as the same
+ * body posted to its endpoint would be (api__handle), with that endpoint's
+ * limits, and the batch holds no JSON tree while its items run.
+ *
+ * The server runs the items itself, on its pool, and writes each line as
+ * it is done (api_batch_run, api_batch_line); the endpoint's own run below
+ * serves them in order, for callers without a pool (the codec's tests, the
+ * fuzz target, a program that links the library).
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "endpoints.h"
+
+typedef struct batch_item {
+  char *id;     /* the compact JSON text of its id; "null" when none */
+  size_t ep;    /* its endpoint */
+  char *body;   /* the compact text of its body; NULL when the item is bad */
+  size_t len;   /* of body */
+  api_err *bad; /* why the item is refused, or NULL */
+} batch_item;
+
+struct api_batch {
+  batch_item *items;
+  size_t n;
+  size_t held;
+};
+
+static const char *const ITEM_KEYS = "id, path, body";
+
+size_t api_batch_size(const api_batch *b) { return b ? b->n : 0; }
+
+size_t api_batch_held(const api_batch *b) { return b ? b->held : 0; }
+
+void api_batch_free(api_batch *b) {
+  if (!b)
+    return;
+  for (size_t i = 0; i < b->n; i++) {
+    free(b->items[i].id);
+    free(b->items[i].body);
+    free(b->items[i].bad);
+  }
+  free(b->items);
+  free(b);
+}
+
+/* The computing endpoints, for a message: "/orbit, /simulate, ...". */
+static void computing_paths(char *out, size_t n) {
+  size_t k = 0;
+  out[0] = 0;
+  for (size_t i = 0; i < api_endpoint_count(); i++) {
+    const api_endpoint *ep = api_endpoint_at(i);
+    if (ep->run_class != API_RUN_COMPUTE)
+      continue;
+    int w = snprintf(out + k, n - k, "%s%s", k ? ", " : "", ep->path);
+    if (w < 0 || (size_t)w >= n - k)
+      break;
+    k += (size_t)w;
+  }
+}
+
+/* Check item @a v; 0, or -1 with its problem in @a e (pointers relative to
+ * the item). */
+static int check_item(const json_t *v, batch_item *it, api_err *e) {
+  const char *k;
+  json_t *f;
+  char paths[128];
+  if (!json_is_object(v))
+    return api__fail(e, API_P_INVALID_TYPE, NULL,
+                     "an item of a batch must be an object with %s", ITEM_KEYS);
+  const json_t *id = json_object_get(v, "id");
+  if (id && !json_is_string(id) && !json_is_number(id) && !json_is_null(id))
+    return api__fail(e, API_P_INVALID_TYPE, "/id",
+                     "the id of an item must be a string or a number");
+  if (id) {
+    size_t n;
+    free(it->id);
+    if (!(it->id = api__dump(id, &n)))
+      return api__fail(e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  }
+  json_object_foreach((json_t *)v, k, f) {
+    if (strcmp(k, "id") && strcmp(k, "path") && strcmp(k, "body")) {
+      char p[96];
+      snprintf(p, sizeof p, "/%.80s", k);
+      return api__fail(e, API_P_UNKNOWN_FIELD, p,
+                       "unknown field \"%.80s\"; an item has %s", k, ITEM_KEYS);
+    }
+  }
+  const json_t *path = json_object_get(v, "path");
+  if (!path)
+    return api__fail(e, API_P_MISSING_FIELD, "/path",
+                     "an item needs \"path\", the endpoint it is for");
+  if (!json_is_string(path))
+    return api__fail(e, API_P_INVALID_TYPE, "/path",
+                     "\"path\" must be a string such as \"/orbit\"");
+  computing_paths(paths, sizeof paths);
+  const char *ps = json_string_value(path);
+  int route = api_route("POST", ps, &it->ep);
+  if (route == 404)
+    return api__fail(e, API_P_NOT_FOUND, "/path",
+                     "no endpoint %.60s; an item may ask %s", ps, paths);
+  if (route != 200 || api_endpoint_at(it->ep)->run_class != API_RUN_COMPUTE)
+    return api__fail(e, API_P_INVALID_VALUE, "/path",
+                     "%.60s is not a computing endpoint; an item may ask %s",
+                     ps, paths);
+  const json_t *body = json_object_get(v, "body");
+  if (!body)
+    return api__fail(e, API_P_MISSING_FIELD, "/body",
+                     "an item needs \"body\", the request for %s", ps);
+  if (!json_is_object(body))
+    return api__fail(e, API_P_INVALID_TYPE, "/body",
+                     "\"body\" must be an object, the request for %s", ps);
+  if (!(it->body = api__dump(body, &it->len)))
+    return api__fail(e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  return 0;
+}
+
+/* The batch of the parsed body @a root; NULL with the problem in c->e. */
+static api_batch *batch_of(const json_t *root, const api_call *c) {
+  const char *k;
+  json_t *f;
+  json_object_foreach((json_t *)root, k, f) {
+    if (strcmp(k, "requests") != 0) {
+      char p[96];
+      snprintf(p, sizeof p, "/%.80s", k);
+      api__fail(c->e, API_P_UNKNOWN_FIELD, p,
+                "unknown field \"%.80s\"; a batch has \"requests\" only", k);
+      return NULL;
+    }
+  }
+  const json_t *rq = json_object_get(root, "requests");
+  if (!rq) {
+    api__fail(c->e, API_P_MISSING_FIELD, "/requests",
+              "a batch needs \"requests\", an array of {%s}", ITEM_KEYS);
+    return NULL;
+  }
+  if (!json_is_array(rq)) {
+    api__fail(c->e, API_P_INVALID_TYPE, "/requests",
+              "\"requests\" must be an array of {%s}", ITEM_KEYS);
+    return NULL;
+  }
+  size_t n = json_array_size(rq);
+  if (n == 0) {
+    api__fail(c->e, API_P_INVALID_VALUE, "/requests",
+              "the batch has no requests");
+    return NULL;
+  }
+  if (n > c->lim->max_batch_items) {
+    api__limit(c->e, "max_batch_items", (double)c->lim->max_batch_items,
+               "/requests", "the batch has %zu requests, over the limit of %zu",
+               n, c->lim->max_batch_items);
+    return NULL;
+  }
+  api_batch *b = calloc(1, sizeof *b);
+  if (!b || !(b->items = calloc(n, sizeof *b->items))) {
+    free(b);
+    api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+    return NULL;
+  }
+  b->n = n;
+  for (size_t i = 0; i < n; i++) {
+    batch_item *it = &b->items[i];
+    api_err e;
+    memset(&e, 0, sizeof e);
+    if (check_item(json_array_get(rq, i), it, &e) != 0) {
+      if (e.kind == API_P_OUT_OF_MEMORY || !(it->bad = malloc(sizeof e))) {
+        api_batch_free(b);
+        api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+        return NULL;
+      }
+      *it->bad = e;
+    }
+    b->held += it->len + (it->id ? strlen(it->id) : 0) + sizeof *it;
+  }
+  return b;
+}
+
+int api_batch_open(const char *body, size_t len, const api_limits *lim,
+                   api_batch **b, api_response *out) {
+  api_err e;
+  api_call c = {lim, NULL, &e, NULL};
+  memset(&e, 0, sizeof e);
+  memset(out, 0, sizeof *out);
+  json_t *root = api__parse(body ? body : "", len, lim, &e);
+  *b = root ? batch_of(root, &c) : NULL;
+  json_decref(root);
+  if (!*b) {
+    api__problem_response(&e, out);
+    return -1;
+  }
+  return 0;
+}
+
+int api_batch_run(api_batch *b, size_t i, const api_limits *lim,
+                  const api_server_info *srv, api_response *out) {
+  const batch_item *it = &b->items[i];
+  memset(out, 0, sizeof *out);
+  if (it->bad) {
+    api__problem_response(it->bad, out);
+    return out->status;
+  }
+  return api__handle(it->ep, it->body, it->len, lim, srv, out, "/body");
+}
+
+api_stream *api_batch_line(const api_batch *b, size_t i, api_response *item,
+                           size_t *held) {
+  const char *id = b->items[i].id ? b->items[i].id : "null";
+  size_t n = strlen(id) + 64;
+  char *head = malloc(n);
+  if (!head) {
+    api_response_free(item);
+    return NULL;
+  }
+  int k =
+      snprintf(head, n, "{\"id\":%s,\"index\":%zu,\"status\":%d,\"body\":", id,
+               i, item->status);
+  *held = (size_t)k + 2 + item->held;
+  return api__stream_wrap(head, (size_t)k, item, "}\n");
+}
+
+void api_batch_done(size_t ok, size_t failed, double seconds,
+                    api_response *out) {
+  api_wbuf w = {NULL, 0, 0, 0};
+  char num[64];
+  memset(out, 0, sizeof *out);
+  API_W_LIT(&w, "{\"done\":true,\"ok\":");
+  api__w_put(&w, num, (size_t)snprintf(num, sizeof num, "%zu", ok));
+  API_W_LIT(&w, ",\"failed\":");
+  api__w_put(&w, num, (size_t)snprintf(num, sizeof num, "%zu", failed));
+  API_W_LIT(&w, ",\"seconds\":");
+  api__w_real(&w, seconds);
+  API_W_LIT(&w, "}\n");
+  out->status = 200;
+  out->content_type = "application/x-ndjson";
+  out->body = w.p;
+  out->len = w.oom ? 0 : w.len;
+  out->held = out->len;
+}
+
+/* ---- the endpoint, served in order ---------------------------------------
+ */
+
+typedef struct batch_x {
+  api_batch *b;
+  api_wbuf text; /* the lines */
+  size_t ok, failed;
+  double t0;
+} batch_x;
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int ep_batch_decode(const json_t *root, const api_call *c, void **xp) {
+  batch_x *x = api__alloc(sizeof *x, xp, c);
+  if (!x)
+    return -1;
+  x->t0 = now();
+  return (x->b = batch_of(root, c)) ? 0 : -1;
+}
+
+/* Append the whole of stream @a s to @a w, and free it. */
+static int drain(api_wbuf *w, api_stream *s) {
+  char buf[4096];
+  long k;
+  while ((k = api_stream_read(s, buf, sizeof buf)) > 0)
+    api__w_put(w, buf, (size_t)k);
+  api_stream_free(s);
+  return k < 0 || w->oom ? -1 : 0;
+}
+
+int ep_batch_run(void *xp, const api_call *c) {
+  batch_x *x = xp;
+  for (size_t i = 0; i < x->b->n; i++) {
+    api_response r;
+    size_t held;
+    api_batch_run(x->b, i, c->lim, c->srv, &r);
+    if (r.status == 200)
+      x->ok++;
+    else
+      x->failed++;
+    api_stream *line = api_batch_line(x->b, i, &r, &held);
+    if (!line || drain(&x->text, line) != 0)
+      return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL,
+                       "the answer could not be written: out of memory");
+  }
+  api_response done;
+  api_batch_done(x->ok, x->failed, now() - x->t0, &done);
+  api__w_put(&x->text, done.body ? done.body : "", done.len);
+  int oom = !done.len || x->text.oom;
+  api_response_free(&done);
+  return oom ? api__fail(c->e, API_P_OUT_OF_MEMORY, NULL,
+                         "the answer could not be written: out of memory")
+             : 0;
+}
+
+int ep_batch_encode(const void *xp, const api_call *c, api_response *out) {
+  batch_x *x = (batch_x *)xp; /* its text moves to the answer */
+  (void)c;
+  out->status = 200;
+  out->content_type = "application/x-ndjson";
+  out->body = x->text.p;
+  out->len = x->text.len;
+  out->held = x->text.len;
+  x->text = (api_wbuf){NULL, 0, 0, 0};
+  return 0;
+}
+
+void ep_batch_release(void *xp) {
+  batch_x *x = xp;
+  if (!x)
+    return;
+  api_batch_free(x->b);
+  free(x->text.p);
+  free(x);
+}
