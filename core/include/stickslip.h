@@ -753,6 +753,127 @@ SS_API int ss_stability(const ss_model *m, int n, const ss_mode *modes,
                         const double *tau, const double z0[4],
                         const ss_stab_opts *opts, ss_stab *st);
 
+/* ------------------------------------------------------------------------ */
+/* Continuation of an orbit family in one parameter                         */
+/* ------------------------------------------------------------------------ */
+
+/** The dimensionless parameters, for continuation. */
+typedef enum ss_param_id {
+  SS_PARAM_CHI = 0,
+  SS_PARAM_ETA = 1,
+  SS_PARAM_US = 2,
+  SS_PARAM_UR = 3,
+  SS_PARAM_V = 4
+} ss_param_id;
+
+/** "chi", "eta", "us", "ur", "V"; NULL for anything else. */
+SS_API const char *ss_param_name(ss_param_id id);
+
+/** The parameter called @a name; SS_OK or SS_EINVAL. */
+SS_API int ss_param_by_name(const char *name, ss_param_id *id);
+
+/** One orbit of a family. */
+typedef struct ss_cont_point {
+  double value;                    /**< the continued parameter */
+  double durations[SS_MAX_PHASES]; /**< of the phases of the family */
+  double period;                   /**< their sum */
+  double z0[4];                    /**< start, on Sigma0, in z */
+  int n_turns;                     /**< returns to Sigma0 per period */
+  double eig_re[2], eig_im[2];     /**< multipliers, larger modulus first */
+  double spectral_radius;          /**< the largest |multiplier| */
+  int stable;                      /**< spectral radius < 1 */
+  ss_margin min_margin;            /**< the smallest feasibility margin */
+  double residual;                 /**< max |F| of the orbit equations */
+} ss_cont_point;
+
+/** What happens at a special point of a family. */
+typedef enum ss_special_kind {
+  SS_SPECIAL_GRAZING = 0,         /**< a feasibility margin reaches zero */
+  SS_SPECIAL_FOLD = 1,            /**< the family turns back in the parameter */
+  SS_SPECIAL_SADDLE_NODE = 2,     /**< a real multiplier through +1 */
+  SS_SPECIAL_PERIOD_DOUBLING = 3, /**< a real multiplier through -1 */
+  SS_SPECIAL_NEIMARK_SACKER = 4   /**< a complex pair through |m| = 1 */
+} ss_special_kind;
+
+/** "grazing", "fold", "saddle_node", "period_doubling", "neimark_sacker";
+ *  NULL for anything else. */
+SS_API const char *ss_special_name(ss_special_kind k);
+
+/** A located special point. */
+typedef struct ss_special {
+  ss_special_kind kind;
+  double value; /**< the parameter where it is located */
+  /** The width of the final bracket in the parameter, relative to |value|
+   *  (the location's precision) */
+  double precision;
+  ss_cont_point at; /**< the orbit there (the feasible side of a grazing) */
+  /** grazing: the margin that reaches zero ("switching", "slip_below_V",
+   *  "overshoot_above_V", "stick_below_ur", "stick_above_minus_ur",
+   *  "transversality"), its phase and time in at.min_margin */
+  char margin[24];
+  int stable_before, stable_after; /**< the stability verdict either side */
+  char detail[256];                /**< a sentence */
+} ss_special;
+
+/** The most special points one family reports. */
+#define SS_MAX_SPECIAL 32
+
+/** Options of ss_continue(); zero-initialise, then set param, lo and hi. */
+typedef struct ss_cont_opts {
+  ss_param_id param; /**< the continued parameter */
+  double lo, hi;     /**< its range, lo < hi, containing the start */
+  int max_points;    /**< accepted points in all (0: 200) */
+  /** The first step, in the scaled arclength (parameter over (hi - lo),
+   *  durations over the start's period); 0: 0.02 */
+  double step;
+  int direction;      /**< 0 both ways from the start, +1 up, -1 down */
+  double max_seconds; /**< time budget (0: none) */
+  /** Polled between steps: a non-zero answer stops with SS_ECANCELED. */
+  int (*cancelled)(void *cls);
+  void *cancel_cls;
+} ss_cont_opts;
+
+/** A family: its points in order along it, and its special points. */
+typedef struct ss_branch {
+  int n_phases;
+  ss_mode modes[SS_MAX_PHASES];
+  int n_points;
+  ss_cont_point *points; /**< malloc'd; ss_branch_free() */
+  int start;             /**< the index of the starting orbit in points */
+  int n_special;
+  ss_special special[SS_MAX_SPECIAL];
+  /** Why the family ended going down ([0]) and up ([1]) from the start;
+   *  "" for a direction not followed. */
+  char end[2][192];
+} ss_branch;
+
+/**
+ * Continue the periodic orbit @a start (its modes and durations; it is
+ * solved again at @a p) in the parameter opts->param over [lo, hi], by
+ * pseudo-arclength on the duration equations of ss_orbit_equations() with
+ * the parameter as one more unknown (its derivative by central differences),
+ * with an adaptive step.  Every accepted point is feasible by
+ * ss_orbit_check() and has its stability.  Between accepted points, sign
+ * changes locate special points to a relative 1e-10 in the parameter: a
+ * point that is not feasible ends the family at a grazing, located by
+ * bisection along the family; the tangent's parameter component at a fold;
+ * det(I - J), det(I + J) and det J - 1 (a complex pair) of the Poincare map's
+ * Jacobian J at the multiplier crossings.
+ * @param p      the parameters; p's value of opts->param is the start's
+ * @param start  a feasible orbit at @a p (as ss_orbit_find() gives)
+ * @param[out] b the family; release with ss_branch_free() whatever happens
+ * @return SS_OK (b->end says why each direction ended); SS_EINVAL (bad
+ *         options or a start outside the range); SS_INFEASIBLE or
+ *         SS_ENOCONV (the start is not a feasible orbit at @a p);
+ *         SS_ELIMIT_TIME or SS_ECANCELED (b holds what was found);
+ *         SS_ENOMEM.  Thread-safe (the cancel hook aside).
+ */
+SS_API int ss_continue(const ss_params *p, const ss_orbit *start,
+                       const ss_cont_opts *opts, ss_branch *b, ss_diag *d);
+
+/** Release what ss_continue() allocated.  NULL-safe; zeroes @a b. */
+SS_API void ss_branch_free(ss_branch *b);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,700 @@
+/*
+ * continue.c: a family of periodic orbits followed in one parameter.
+ *
+ * The unknowns are y = (tau_1..tau_n, q): the phase durations and the
+ * parameter, scaled (p = lo + S q).  The n duration equations of
+ * ss_orbit_equations() (the start state eliminated through (5.1)) leave a
+ * curve; it is followed by pseudo-arclength: a step of ds along the unit
+ * tangent t, then Newton on [F(y); t.(y - y_pred)] = 0.  dF/dtau is the
+ * analytic Jacobian; dF/dq is a central difference (h = 1e-6 in q, an error
+ * of order 1e-12 that only slows Newton, never moves the root: F itself is
+ * exact).  Durations are scaled by the start's period so that a unit of
+ * arclength weighs the parameter and the durations alike.
+ *
+ * A point is accepted only when it is feasible (ss_orbit_check(): every
+ * phase ends at its first crossing, into the next mode, without grazing).
+ * A step that lands on an infeasible orbit is not taken: the boundary is
+ * bisected along the chord between the last feasible point and it (each try
+ * corrected onto the family, on the hyperplane normal to the chord), and
+ * the family ends at a grazing.  The other special points are sign changes
+ * between accepted points, located the same way with regula falsi.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal.h"
+#include "linalg.h"
+
+#define NMAX (SS_MAX_PHASES + 1)
+
+static const char *const PARAM_NAMES[] = {"chi", "eta", "us", "ur", "V"};
+
+const char *ss_param_name(ss_param_id id) {
+  return (unsigned)id < 5 ? PARAM_NAMES[id] : NULL;
+}
+
+int ss_param_by_name(const char *name, ss_param_id *id) {
+  for (int i = 0; name && id && i < 5; i++)
+    if (!strcmp(name, PARAM_NAMES[i])) {
+      *id = (ss_param_id)i;
+      return SS_OK;
+    }
+  return SS_EINVAL;
+}
+
+static const char *const SPECIAL_NAMES[] = {
+    "grazing", "fold", "saddle_node", "period_doubling", "neimark_sacker"};
+
+const char *ss_special_name(ss_special_kind k) {
+  return (unsigned)k < 5 ? SPECIAL_NAMES[k] : NULL;
+}
+
+void ss_branch_free(ss_branch *b) {
+  if (!b)
+    return;
+  free(b->points);
+  memset(b, 0, sizeof *b);
+}
+
+static double *param_ref(ss_params *p, ss_param_id id) {
+  switch (id) {
+  case SS_PARAM_CHI:
+    return &p->chi;
+  case SS_PARAM_ETA:
+    return &p->eta;
+  case SS_PARAM_US:
+    return &p->us;
+  case SS_PARAM_UR:
+    return &p->ur;
+  case SS_PARAM_V:
+    return &p->V;
+  }
+  return NULL;
+}
+
+typedef struct cont {
+  ss_params p; /* the others, as given */
+  ss_param_id id;
+  int n;
+  const ss_mode *modes;
+  double lo, hi, S; /* p = lo + S q */
+  double T;         /* durations are tau / T in y */
+  double t0, budget;
+  int (*cancelled)(void *);
+  void *cancel_cls;
+  int stop; /* SS_ELIMIT_TIME or SS_ECANCELED once asked to stop */
+} cont;
+
+static double value_of(const cont *c, const double *y) {
+  return c->lo + c->S * y[c->n];
+}
+
+static int model_at(const cont *c, double v, ss_model *m) {
+  ss_params p = c->p;
+  *param_ref(&p, c->id) = v;
+  return ss_model_init(m, &p, NULL);
+}
+
+/* F(y) (n values) and, when J is not NULL, dF/dy (n x (n+1), row-major). */
+static int eval(const cont *c, const double *y, double *F, double *J,
+                double z0[4]) {
+  int n = c->n, np = n + 1;
+  double tau[SS_MAX_PHASES], Jt[SS_MAX_PHASES * SS_MAX_PHASES];
+  ss_model m;
+  for (int k = 0; k < n; k++) {
+    tau[k] = c->T * y[k];
+    if (!(tau[k] > 0))
+      return SS_EDOMAIN;
+  }
+  if (model_at(c, value_of(c, y), &m) != SS_OK)
+    return SS_EDOMAIN;
+  int rc = ss_orbit_equations(&m, n, c->modes, tau, z0, F, J ? Jt : NULL);
+  if (rc != SS_OK || !J)
+    return rc;
+  for (int i = 0; i < n; i++)
+    for (int k = 0; k < n; k++)
+      J[np * i + k] = Jt[n * i + k] * c->T;
+  double h = 1e-6, Fp[SS_MAX_PHASES], Fm[SS_MAX_PHASES], z[4];
+  ss_model mp, mm;
+  if (model_at(c, value_of(c, y) + c->S * h, &mp) != SS_OK ||
+      model_at(c, value_of(c, y) - c->S * h, &mm) != SS_OK ||
+      ss_orbit_equations(&mp, n, c->modes, tau, z, Fp, NULL) != SS_OK ||
+      ss_orbit_equations(&mm, n, c->modes, tau, z, Fm, NULL) != SS_OK)
+    return SS_EDOMAIN;
+  for (int i = 0; i < n; i++)
+    J[np * i + n] = (Fp[i] - Fm[i]) / (2 * h);
+  return SS_OK;
+}
+
+/* The unit tangent at y, oriented along @a prev: [J; prev^T] t = e_n. */
+static int tangent(const cont *c, const double *y, const double *prev,
+                   double *t) {
+  int n = c->n, np = n + 1, piv[NMAX];
+  double A[NMAX * NMAX], F[SS_MAX_PHASES], z0[4];
+  int rc = eval(c, y, F, A, z0);
+  if (rc != SS_OK)
+    return rc;
+  for (int k = 0; k < np; k++) {
+    A[np * n + k] = prev[k];
+    t[k] = 0;
+  }
+  t[n] = 1;
+  if (lu_factor(A, np, piv, 1e-14))
+    return SS_ESINGULAR;
+  lu_solve(A, np, piv, t);
+  double s = 0;
+  for (int k = 0; k < np; k++)
+    s += t[k] * t[k];
+  s = sqrt(s);
+  if (!(s > 0) || !isfinite(s))
+    return SS_ESINGULAR;
+  for (int k = 0; k < np; k++)
+    t[k] /= s;
+  return SS_OK;
+}
+
+/* Newton from @a y (updated in place) on F = 0 and a.(y - base) = 0.
+ * Returns SS_OK with the iterations in *iters, or a failure. */
+static int correct(const cont *c, double *y, const double *a,
+                   const double *base, int *iters, double *res) {
+  int n = c->n, np = n + 1, piv[NMAX];
+  double A[NMAX * NMAX], F[NMAX], z0[4];
+  for (int it = 1; it <= 12; it++) {
+    int rc = eval(c, y, F, A, z0);
+    if (rc != SS_OK)
+      return rc;
+    double g = 0;
+    for (int k = 0; k < np; k++) {
+      A[np * n + k] = a[k];
+      g += a[k] * (y[k] - base[k]);
+    }
+    F[n] = g;
+    for (int k = 0; k < np; k++)
+      F[k] = -F[k];
+    if (lu_factor(A, np, piv, 1e-15))
+      return SS_ESINGULAR;
+    lu_solve(A, np, piv, F);
+    double dy = 0, ymax = 1;
+    for (int k = 0; k < np; k++) {
+      y[k] += F[k];
+      dy = fmax(dy, fabs(F[k]));
+      ymax = fmax(ymax, fabs(y[k]));
+    }
+    if (!isfinite(dy) || dy > 1)
+      return SS_ENOCONV;
+    if (dy <= 1e-13 * ymax) {
+      /* the residual at the final iterate */
+      if ((rc = eval(c, y, F, NULL, z0)) != SS_OK)
+        return rc;
+      double r = 0;
+      for (int k = 0; k < n; k++)
+        r = fmax(r, fabs(F[k]));
+      *iters = it;
+      *res = r;
+      return r < 1e-9 ? SS_OK : SS_ENOCONV;
+    }
+  }
+  return SS_ENOCONV;
+}
+
+/* The smallest margin of an orbit, the transversality slope among them,
+ * and its name. */
+static ss_margin smallest_margin(const ss_orbit *o, const char **name) {
+  static const char *const NAMES[] = {"slip_below_V",   "overshoot_above_V",
+                                      "stick_below_ur", "stick_above_minus_ur",
+                                      "switching",      "transversality"};
+  const ss_margin *all[] = {&o->slip_below,  &o->over_above, &o->stick_upper,
+                            &o->stick_lower, &o->switching,  &o->transversal};
+  int best = 0;
+  for (int k = 1; k < 6; k++)
+    if (all[k]->value < all[best]->value)
+      best = k;
+  if (name)
+    *name = NAMES[best];
+  return *all[best];
+}
+
+/* The orbit at y: feasibility (ss_orbit_check) and stability.  SS_OK,
+ * SS_INFEASIBLE (reason in d), or a failure. */
+static int point_at(const cont *c, const double *y, double res,
+                    ss_cont_point *pt, ss_diag *d) {
+  int n = c->n;
+  ss_model m;
+  ss_orbit o;
+  memset(&o, 0, sizeof o);
+  memset(pt, 0, sizeof *pt);
+  pt->value = value_of(c, y);
+  if (model_at(c, pt->value, &m) != SS_OK)
+    return ss__fail(d, SS_INFEASIBLE, ss_param_name(c->id), pt->value,
+                    "the parameter left its domain");
+  o.n_phases = n;
+  o.kind = ss_orbit_kind_of(n, c->modes);
+  double F[SS_MAX_PHASES];
+  for (int k = 0; k < n; k++) {
+    o.modes[k] = c->modes[k];
+    o.durations[k] = c->T * y[k];
+  }
+  int rc = ss_orbit_equations(&m, n, c->modes, o.durations, o.z0, F, NULL);
+  if (rc != SS_OK)
+    return rc;
+  if ((rc = ss_orbit_check(&m, &o, d)) != SS_OK)
+    return rc;
+  ss_stab_opts so = {o.n_turns, 0};
+  ss_stab st;
+  if ((rc = ss_stability(&m, n, c->modes, o.durations, o.z0, &so, &st)) !=
+      SS_OK)
+    return rc == SS_ESINGULAR ? ss__fail(d, SS_INFEASIBLE, "phases", 0,
+                                         "a phase ends tangentially (grazing)")
+                              : rc;
+  memcpy(pt->durations, o.durations, sizeof o.durations);
+  pt->period = o.period;
+  memcpy(pt->z0, o.z0, sizeof o.z0);
+  pt->n_turns = o.n_turns;
+  for (int k = 0; k < 2; k++) {
+    pt->eig_re[k] = st.eig_re[k];
+    pt->eig_im[k] = st.eig_im[k];
+  }
+  pt->spectral_radius = st.spectral_radius;
+  pt->stable = st.stable;
+  pt->residual = res;
+  pt->min_margin = smallest_margin(&o, NULL);
+  return SS_OK;
+}
+
+/* The name of the smallest margin of the orbit at y (for a grazing). */
+static const char *min_margin_name(const cont *c, const double *y) {
+  ss_model m;
+  ss_orbit o;
+  double F[SS_MAX_PHASES];
+  const char *name = "unknown";
+  memset(&o, 0, sizeof o);
+  if (model_at(c, value_of(c, y), &m) != SS_OK)
+    return name;
+  o.n_phases = c->n;
+  for (int k = 0; k < c->n; k++) {
+    o.modes[k] = c->modes[k];
+    o.durations[k] = c->T * y[k];
+  }
+  if (ss_orbit_equations(&m, c->n, c->modes, o.durations, o.z0, F, NULL) ||
+      ss_orbit_check(&m, &o, NULL))
+    return name;
+  smallest_margin(&o, &name);
+  return name;
+}
+
+static int should_stop(cont *c) {
+  if (c->stop)
+    return 1;
+  if (c->cancelled && c->cancelled(c->cancel_cls))
+    c->stop = SS_ECANCELED;
+  else if (c->budget > 0 && ss__now() - c->t0 > c->budget)
+    c->stop = SS_ELIMIT_TIME;
+  return c->stop != 0;
+}
+
+/* The point of the family at fraction th of the chord from ya to yb,
+ * corrected onto the family on the hyperplane normal to the chord. */
+static int on_chord(const cont *c, const double *ya, const double *yb,
+                    double th, double *y, double *res) {
+  int np = c->n + 1, it;
+  double a[NMAX], base[NMAX];
+  for (int k = 0; k < np; k++) {
+    a[k] = yb[k] - ya[k];
+    base[k] = ya[k] + th * a[k];
+    y[k] = base[k];
+  }
+  return correct(c, y, a, base, &it, res);
+}
+
+/* Test functions of the multiplier crossings at a point: det(I - J),
+ * det(I + J), and det J - 1 when the multipliers are a complex pair (NAN
+ * when they are real). */
+static void crossings(const ss_cont_point *pt, double psi[3]) {
+  double tr, det;
+  if (pt->eig_im[0] != 0) {
+    tr = 2 * pt->eig_re[0];
+    det = pt->eig_re[0] * pt->eig_re[0] + pt->eig_im[0] * pt->eig_im[0];
+  } else {
+    tr = pt->eig_re[0] + pt->eig_re[1];
+    det = pt->eig_re[0] * pt->eig_re[1];
+  }
+  psi[0] = 1 - tr + det;
+  psi[1] = 1 + tr + det;
+  psi[2] = pt->eig_im[0] != 0 ? det - 1 : NAN;
+}
+
+/* The value of test function @a which (0..2 crossings, 3 the tangent's
+ * parameter component) at the corrected point y. */
+static int test_value(const cont *c, const double *y, const double *dir,
+                      int which, double res, double *v, ss_cont_point *pt) {
+  if (which == 3) {
+    double t[NMAX];
+    int rc = tangent(c, y, dir, t);
+    if (rc != SS_OK)
+      return rc;
+    *v = t[c->n];
+    return point_at(c, y, res, pt, NULL) == SS_OK ? SS_OK : SS_INFEASIBLE;
+  }
+  int rc = point_at(c, y, res, pt, NULL);
+  if (rc != SS_OK)
+    return rc;
+  double psi[3];
+  crossings(pt, psi);
+  *v = psi[which];
+  return isnan(*v) ? SS_ENOCONV : SS_OK;
+}
+
+static void add_special(ss_branch *b, const ss_special *s) {
+  if (b->n_special < SS_MAX_SPECIAL)
+    b->special[b->n_special++] = *s;
+}
+
+/* Locate the sign change of test function @a which between the accepted
+ * points ya (value fa) and yb (fb) by regula falsi (Illinois) on the chord
+ * fraction, to a relative 1e-10 in the parameter. */
+static void locate(cont *c, const double *ya, const double *yb,
+                   const double *dir, int which, double fa, double fb,
+                   const ss_cont_point *pa, const ss_cont_point *pb,
+                   ss_special_kind kind, ss_branch *b) {
+  int np = c->n + 1;
+  double lo = 0, hi = 1, flo = fa, fhi = fb, y[NMAX], best[NMAX];
+  double res = 0;
+  ss_cont_point pt = *pa, pbest = *pa;
+  int side = 0, ok = 0;
+  double vlo = pa->value, vhi = pb->value; /* the parameter at the ends */
+  memcpy(best, ya, sizeof(double) * (size_t)np);
+  for (int it = 0; it < 100; it++) {
+    double chord = 0;
+    for (int k = 0; k < np; k++)
+      chord = fmax(chord, fabs(yb[k] - ya[k]) * (hi - lo));
+    /* a fold is located on the chord (the parameter is stationary there),
+     * the others in the parameter */
+    if (kind == SS_SPECIAL_FOLD
+            ? chord <= 1e-10
+            : fabs(vhi - vlo) <= 1e-10 * fmax(fabs(vlo), DBL_MIN)) {
+      ok = 1;
+      break;
+    }
+    double th = lo + flo * (lo - hi) / (fhi - flo);
+    if (!(th > lo && th < hi) || it % 4 == 3)
+      th = 0.5 * (lo + hi); /* keep the bracket shrinking */
+    double f;
+    if (on_chord(c, ya, yb, th, y, &res) != SS_OK ||
+        test_value(c, y, dir, which, res, &f, &pt) != SS_OK)
+      break;
+    memcpy(best, y, sizeof y[0] * (size_t)np);
+    pbest = pt;
+    if (f == 0) { /* an exact zero: the bracket is the rounding */
+      vlo = pt.value;
+      vhi = nextafter(vlo, INFINITY);
+      ok = 1;
+      break;
+    }
+    if ((f < 0) == (flo < 0)) {
+      lo = th;
+      flo = f;
+      vlo = pt.value;
+      if (side == -1)
+        fhi /= 2;
+      side = -1;
+    } else {
+      hi = th;
+      fhi = f;
+      vhi = pt.value;
+      if (side == 1)
+        flo /= 2;
+      side = 1;
+    }
+  }
+  ss_special s;
+  memset(&s, 0, sizeof s);
+  s.kind = kind;
+  s.at = pbest;
+  s.value = pbest.value;
+  s.precision = fabs(vhi - vlo) / fmax(fabs(s.value), DBL_MIN);
+  s.stable_before = pa->stable;
+  s.stable_after = pb->stable;
+  static const char *const WHAT[] = {
+      "", "the family turns back", "a real multiplier crosses +1",
+      "a real multiplier crosses -1", "a complex pair crosses the unit circle"};
+  snprintf(s.detail, sizeof s.detail, "%.40s at %.4s = %.15g%.40s%.30s",
+           WHAT[kind], ss_param_name(c->id), s.value,
+           pa->stable != pb->stable
+               ? (pa->stable ? "; stable before, unstable after"
+                             : "; unstable before, stable after")
+               : "",
+           ok ? "" : " (not located to 1e-10)");
+  (void)best;
+  add_special(b, &s);
+}
+
+/* Bisect the feasibility boundary between the feasible ya and the
+ * infeasible yb; record the grazing and the last feasible point. */
+static void locate_grazing(cont *c, const double *ya, const double *yb,
+                           const ss_cont_point *pa, const char *why,
+                           ss_branch *b, ss_cont_point *last) {
+  int np = c->n + 1;
+  double lo = 0, hi = 1, y[NMAX], ylo[NMAX], res;
+  ss_cont_point pt, plo = *pa;
+  int ok = 0;
+  double vlo = pa->value, vhi = value_of(c, yb);
+  memcpy(ylo, ya, sizeof y[0] * (size_t)np);
+  for (int it = 0; it < 100; it++) {
+    if (fabs(vhi - vlo) <= 1e-10 * fmax(fabs(vlo), DBL_MIN)) {
+      ok = 1;
+      break;
+    }
+    double th = 0.5 * (lo + hi);
+    int rc = on_chord(c, ya, yb, th, y, &res);
+    if (rc == SS_OK)
+      rc = point_at(c, y, res, &pt, NULL);
+    if (rc == SS_OK) {
+      lo = th;
+      plo = pt;
+      vlo = pt.value;
+      memcpy(ylo, y, sizeof y[0] * (size_t)np);
+    } else {
+      hi = th;
+      vhi = value_of(c, y); /* corrected, or the chord's when it failed */
+    }
+  }
+  ss_special s;
+  memset(&s, 0, sizeof s);
+  s.kind = SS_SPECIAL_GRAZING;
+  s.at = plo;
+  s.value = plo.value;
+  s.precision = fabs(vhi - vlo) / fmax(fabs(s.value), DBL_MIN);
+  snprintf(s.margin, sizeof s.margin, "%s", min_margin_name(c, ylo));
+  s.stable_before = s.stable_after = plo.stable;
+  snprintf(s.detail, sizeof s.detail,
+           "the %.24s margin reaches zero in phase %d at %.4s = %.15g%.30s; "
+           "beyond: %.90s",
+           s.margin, plo.min_margin.phase, ss_param_name(c->id), s.value,
+           ok ? "" : " (not located to 1e-10)", why);
+  add_special(b, &s);
+  *last = plo;
+}
+
+static int push(ss_cont_point **v, int *n, int *cap, const ss_cont_point *p) {
+  if (*n == *cap) {
+    int nc = *cap ? 2 * *cap : 64;
+    ss_cont_point *w = realloc(*v, (size_t)nc * sizeof *w);
+    if (!w)
+      return SS_ENOMEM;
+    *v = w;
+    *cap = nc;
+  }
+  (*v)[(*n)++] = *p;
+  return SS_OK;
+}
+
+/* Follow the family from y0 in direction @a dir (+1 up in the parameter at
+ * the start, -1 down); the points go to *v, the specials to b. */
+static int follow(cont *c, const double *y0, int dir, double step0,
+                  int max_points, ss_cont_point **v, int *nv, int *cap,
+                  ss_branch *b, char *end, size_t end_n) {
+  int n = c->n, np = n + 1;
+  double y[NMAX], t[NMAX], e[NMAX] = {0};
+  memcpy(y, y0, sizeof y[0] * (size_t)np);
+  e[n] = dir;
+  int rc = tangent(c, y, e, t);
+  if (rc != SS_OK) {
+    snprintf(end, end_n, "no tangent at the start (%s)", ss_strerror(rc));
+    return SS_OK;
+  }
+  double ds = step0, ds_min = 1e-9, ds_max = 0.2;
+  ss_cont_point prev;
+  double res0 = 0;
+  if ((rc = point_at(c, y, res0, &prev, NULL)) != SS_OK) {
+    snprintf(end, end_n, "the start is not feasible");
+    return SS_OK;
+  }
+  while (*nv < max_points) {
+    if (should_stop(c)) {
+      snprintf(end, end_n, "%s", ss_strerror(c->stop));
+      return c->stop;
+    }
+    double yn[NMAX], tn[NMAX], res;
+    int iters;
+    for (int k = 0; k < np; k++)
+      yn[k] = y[k] + ds * t[k];
+    rc = correct(c, yn, t, yn, &iters, &res);
+    if (rc == SS_OK)
+      rc = tangent(c, yn, t, tn);
+    double dot = 0;
+    for (int k = 0; rc == SS_OK && k < np; k++)
+      dot += t[k] * tn[k];
+    if (rc != SS_OK || dot < 0.95) {
+      if ((ds *= 0.5) < ds_min) {
+        snprintf(end, end_n,
+                 "the corrector failed at the smallest step (%s) at %s = "
+                 "%.15g",
+                 ss_strerror(rc != SS_OK ? rc : SS_ENOCONV),
+                 ss_param_name(c->id), value_of(c, y));
+        return SS_OK;
+      }
+      continue;
+    }
+    /* past the end of the range: the last point is on its bound */
+    double vn = value_of(c, yn);
+    int at_bound = 0;
+    if (vn > c->hi || vn < c->lo) {
+      double bound = vn > c->hi ? c->hi : c->lo;
+      double a[NMAX] = {0}, base[NMAX];
+      memcpy(base, yn, sizeof base);
+      a[n] = 1;
+      base[n] = (bound - c->lo) / c->S;
+      memcpy(yn, y, sizeof yn);
+      yn[n] = base[n];
+      if (correct(c, yn, a, base, &iters, &res) != SS_OK ||
+          tangent(c, yn, t, tn) != SS_OK) {
+        if ((ds *= 0.5) < ds_min) {
+          snprintf(end, end_n, "no orbit on the bound %s = %.15g",
+                   ss_param_name(c->id), bound);
+          return SS_OK;
+        }
+        continue;
+      }
+      yn[n] = base[n];
+      at_bound = 1;
+    }
+    ss_cont_point pt;
+    ss_diag why;
+    ss_diag_clear(&why);
+    rc = point_at(c, yn, res, &pt, &why);
+    if (rc != SS_OK) {
+      ss_cont_point last;
+      locate_grazing(c, y, yn, &prev, why.text[0] ? why.text : "infeasible", b,
+                     &last);
+      if ((rc = push(v, nv, cap, &last)) != SS_OK)
+        return rc;
+      snprintf(end, end_n, "grazing at %s = %.15g: %.120s",
+               ss_param_name(c->id), last.value, why.text);
+      return SS_OK;
+    }
+    /* sign changes between prev and pt */
+    double pa[3], pb[3];
+    crossings(&prev, pa);
+    crossings(&pt, pb);
+    static const ss_special_kind KIND[3] = {SS_SPECIAL_SADDLE_NODE,
+                                            SS_SPECIAL_PERIOD_DOUBLING,
+                                            SS_SPECIAL_NEIMARK_SACKER};
+    for (int k = 0; k < 3; k++)
+      if (!isnan(pa[k]) && !isnan(pb[k]) && (pa[k] < 0) != (pb[k] < 0))
+        locate(c, y, yn, t, k, pa[k], pb[k], &prev, &pt, KIND[k], b);
+    if ((t[n] < 0) != (tn[n] < 0) && !at_bound)
+      locate(c, y, yn, t, 3, t[n], tn[n], &prev, &pt, SS_SPECIAL_FOLD, b);
+    if ((rc = push(v, nv, cap, &pt)) != SS_OK)
+      return rc;
+    memcpy(y, yn, sizeof y);
+    memcpy(t, tn, sizeof t);
+    prev = pt;
+    if (at_bound) {
+      snprintf(end, end_n, "the end of the range, %s = %.15g",
+               ss_param_name(c->id), pt.value);
+      return SS_OK;
+    }
+    if (iters <= 3)
+      ds = fmin(ds * 1.5, ds_max);
+    else if (iters >= 6)
+      ds *= 0.6;
+  }
+  snprintf(end, end_n, "max_points (%d) reached", max_points);
+  return SS_OK;
+}
+
+int ss_continue(const ss_params *p, const ss_orbit *start,
+                const ss_cont_opts *opts, ss_branch *b, ss_diag *d) {
+  if (!b)
+    return ss__fail(d, SS_EINVAL, "branch", 0, "no output");
+  memset(b, 0, sizeof *b);
+  if (!p || !start || !opts)
+    return ss__fail(d, SS_EINVAL, "opts", 0, "a NULL argument");
+  if (!ss_param_name(opts->param))
+    return ss__fail(d, SS_EINVAL, "parameter", (double)opts->param,
+                    "unknown parameter");
+  if (!(opts->lo < opts->hi) || !isfinite(opts->lo) || !isfinite(opts->hi))
+    return ss__fail(d, SS_EINVAL, "range", opts->lo,
+                    "the range must be [lo, hi] with lo < hi, both finite");
+  if (opts->direction < -1 || opts->direction > 1 || opts->max_points < 0 ||
+      !(opts->step >= 0) || !(opts->max_seconds >= 0))
+    return ss__fail(d, SS_EINVAL, "opts", 0, "bad options");
+  cont c;
+  memset(&c, 0, sizeof c);
+  c.p = *p;
+  c.id = opts->param;
+  double v0 = *param_ref(&c.p, c.id);
+  if (!(v0 >= opts->lo && v0 <= opts->hi))
+    return ss__fail(d, SS_EINVAL, "range", v0,
+                    "the start's %s = %.15g is outside the range [%.15g, "
+                    "%.15g]",
+                    ss_param_name(c.id), v0, opts->lo, opts->hi);
+  c.n = start->n_phases;
+  c.modes = start->modes;
+  c.lo = opts->lo;
+  c.hi = opts->hi;
+  c.S = opts->hi - opts->lo;
+  c.t0 = ss__now();
+  c.budget = opts->max_seconds;
+  c.cancelled = opts->cancelled;
+  c.cancel_cls = opts->cancel_cls;
+  /* the start, solved again at p */
+  ss_model m;
+  ss_orbit o;
+  int rc = ss_model_init(&m, p, d);
+  if (rc != SS_OK)
+    return rc;
+  if ((rc = ss_orbit_solve(&m, start->n_phases, start->modes, start->durations,
+                           NULL, &o, d)) != SS_OK)
+    return rc;
+  c.T = o.period;
+  b->n_phases = o.n_phases;
+  memcpy(b->modes, o.modes, sizeof o.modes);
+  double y0[NMAX];
+  for (int k = 0; k < c.n; k++)
+    y0[k] = o.durations[k] / c.T;
+  y0[c.n] = (v0 - c.lo) / c.S;
+  int max_points = opts->max_points ? opts->max_points : 200;
+  double step = opts->step > 0 ? opts->step : 0.02;
+  ss_cont_point *down = NULL, *up = NULL, first;
+  int nd = 0, cd = 0, nu = 0, cu = 0;
+  if ((rc = point_at(&c, y0, o.residual, &first, d)) != SS_OK)
+    return rc;
+  int budget_down = opts->direction == 0 ? (max_points - 1) / 2 : 0;
+  int budget_up = max_points - 1 - budget_down;
+  if (opts->direction == -1) {
+    budget_down = max_points - 1;
+    budget_up = 0;
+  }
+  int rc_down = SS_OK, rc_up = SS_OK;
+  if (budget_down > 0)
+    rc_down = follow(&c, y0, -1, step, budget_down, &down, &nd, &cd, b,
+                     b->end[0], sizeof b->end[0]);
+  if (budget_up > 0 && rc_down != SS_ENOMEM)
+    rc_up = follow(&c, y0, +1, step, budget_up, &up, &nu, &cu, b, b->end[1],
+                   sizeof b->end[1]);
+  b->points = malloc((size_t)(nd + nu + 1) * sizeof *b->points);
+  if (!b->points) {
+    free(down);
+    free(up);
+    return ss__fail(d, SS_ENOMEM, "points", 0, "out of memory");
+  }
+  for (int k = 0; k < nd; k++)
+    b->points[k] = down[nd - 1 - k];
+  b->points[nd] = first;
+  for (int k = 0; k < nu; k++)
+    b->points[nd + 1 + k] = up[k];
+  b->n_points = nd + nu + 1;
+  b->start = nd;
+  free(down);
+  free(up);
+  rc = rc_down != SS_OK ? rc_down : rc_up;
+  if (rc != SS_OK)
+    return ss__fail(d, rc, "max_seconds", c.budget, "%s",
+                    rc == SS_ECANCELED ? "the continuation was cancelled"
+                                       : "the time budget ran out");
+  return SS_OK;
+}

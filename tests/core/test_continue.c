@@ -1,0 +1,296 @@
+/*
+ * test_continue.c: families of orbits followed in one parameter, each point
+ * and each special point verified by an independent method: closure by
+ * simulation, multipliers by central differences of the simulated Poincare
+ * map, a grazing by the rk8pd reference simulation and by solving on both
+ * sides of it.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <gsl/gsl_errno.h>
+
+#include "refsim.h"
+#include "stickslip.h"
+#include "test.h"
+
+static const ss_params PAPER = {0.2, 4, 0.0724, 0.6178, 1};
+
+/* The overshoot orbit at @a p, found with no guess. */
+static int overshoot_at(const ss_params *p, ss_orbit *o) {
+  ss_model m;
+  ss_orbit_opts oo;
+  int n = 0;
+  memset(&oo, 0, sizeof oo);
+  oo.kinds = SS_ORBIT_OVERSHOOT;
+  if (ss_model_init(&m, p, NULL) != SS_OK ||
+      ss_orbit_find(&m, &oo, o, 1, &n, NULL, NULL) != SS_OK)
+    return 0;
+  return n;
+}
+
+static double *param(ss_params *p, ss_param_id id) {
+  double *v[] = {&p->chi, &p->eta, &p->us, &p->ur, &p->V};
+  return v[id];
+}
+
+/* The multipliers of a 2x2 matrix, larger modulus first (re, im). */
+static void eig2(const double J[2][2], double re[2], double im[2]) {
+  double tr = J[0][0] + J[1][1], det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+  double disc = tr * tr / 4 - det;
+  if (disc >= 0) {
+    double a = tr / 2 + sqrt(disc), b = tr / 2 - sqrt(disc);
+    re[0] = fabs(a) >= fabs(b) ? a : b;
+    re[1] = fabs(a) >= fabs(b) ? b : a;
+    im[0] = im[1] = 0;
+  } else {
+    re[0] = re[1] = tr / 2;
+    im[0] = sqrt(-disc);
+    im[1] = -im[0];
+  }
+}
+
+/* A point of a family, checked: it closes by simulation, it is feasible,
+ * and its multipliers are those of the finite-difference Jacobian of the
+ * simulated map.  Returns the largest multiplier difference. */
+static double check_point(const ss_params *p0, ss_param_id id,
+                          const ss_branch *b, const ss_cont_point *pt) {
+  ss_params p = *p0;
+  *param(&p, id) = pt->value;
+  ss_model m;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  ss_orbit o;
+  memset(&o, 0, sizeof o);
+  o.n_phases = b->n_phases;
+  memcpy(o.modes, b->modes, sizeof o.modes);
+  memcpy(o.durations, pt->durations, sizeof o.durations);
+  memcpy(o.z0, pt->z0, sizeof o.z0);
+  ASSERT_EQ_INT(ss_orbit_check(&m, &o, NULL), SS_OK);
+  ASSERT_TRUE(o.closure < 1e-12);
+  ASSERT_TRUE(pt->residual < 1e-11);
+  /* within a difference step of a grazing the simulated map is not
+   * smooth: no finite differences there */
+  if (o.min_margin.value < 1e-5)
+    return 0;
+  ss_stab_opts so = {o.n_turns, 1};
+  ss_stab st;
+  ASSERT_EQ_INT(
+      ss_stability(&m, o.n_phases, o.modes, o.durations, o.z0, &so, &st),
+      SS_OK);
+  double re[2], im[2], diff = 0;
+  eig2(st.jac_fd, re, im);
+  for (int k = 0; k < 2; k++)
+    diff = fmax(
+        diff, hypot(re[k] - pt->eig_re[k], fabs(im[k]) - fabs(pt->eig_im[k])));
+  return diff;
+}
+
+/* The rk8pd reference simulation of one period from the orbit's x0: the
+ * switching margin -ur - chi (x2 - x1) at the end of its first phase. */
+static double ref_switching_margin(const ss_params *p, const ss_cont_point *pt,
+                                   const double d0[2]) {
+  ref_params rp = {p->chi, p->eta, p->us, p->ur, p->V};
+  ref_opts ro = {gsl_odeiv2_step_rk8pd, 1e-14, 1e-14, 0, 1e-14};
+  ref_event ev[16];
+  double x0[4] = {pt->z0[0] + d0[0], pt->z0[1] + d0[1], pt->z0[2], pt->z0[3]},
+         xe[4];
+  int me;
+  long n = ref_simulate(&rp, 0, x0, REF_SLIP, pt->durations[0] * 1.01, &ro, ev,
+                        16, xe, &me);
+  ASSERT_TRUE(n >= 1);
+  if (n < 1)
+    return INFINITY;
+  return -p->ur - p->chi * (ev[0].x[1] - ev[0].x[0]);
+}
+
+/* EVIDENCE: README "Families": the paper's overshoot orbit continued in
+ * ur; every point closes and its multipliers match the finite-difference
+ * Jacobian; the family ends below at the grazing of (3.2) at the end of
+ * slip, located to 1e-10, where the rk8pd reference shows the margin at
+ * zero, with the overshoot orbit just above the located value and not just
+ * below */
+static void test_ur_family(void) {
+  ss_orbit start;
+  ASSERT_EQ_INT(overshoot_at(&PAPER, &start), 1);
+  ss_cont_opts co;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_UR;
+  co.lo = 0.3;
+  co.hi = 1.5;
+  co.max_points = 400;
+  ss_branch b;
+  ss_diag d;
+  ASSERT_EQ_INT(ss_continue(&PAPER, &start, &co, &b, &d), SS_OK);
+  ASSERT_TRUE(b.n_points > 10);
+  double worst = 0;
+  for (int i = 0; i < b.n_points; i++) {
+    worst = fmax(worst, check_point(&PAPER, SS_PARAM_UR, &b, &b.points[i]));
+    if (i > 0) /* in order along the family */
+      ASSERT_TRUE(b.points[i].value > b.points[i - 1].value);
+  }
+  printf("ur family: %d points from ur = %.12g to %.12g, multipliers within "
+         "%.2g of the finite-difference ones\n",
+         b.n_points, b.points[0].value, b.points[b.n_points - 1].value, worst);
+  ASSERT_TRUE(worst < 1e-6);
+  ASSERT_TRUE(b.points[b.n_points - 1].value == 1.5);
+  ASSERT_TRUE(strstr(b.end[1], "end of the range") != NULL);
+  /* one special point: the grazing at the bottom */
+  ASSERT_EQ_INT(b.n_special, 1);
+  const ss_special *g = &b.special[0];
+  ASSERT_EQ_INT((int)g->kind, (int)SS_SPECIAL_GRAZING);
+  ASSERT_TRUE(!strcmp(g->margin, "switching"));
+  ASSERT_EQ_INT(g->at.min_margin.phase, 0);
+  ASSERT_TRUE(g->precision <= 1e-10);
+  ASSERT_TRUE(g->value == b.points[0].value);
+  ASSERT_TRUE(strstr(b.end[0], "grazing") != NULL);
+  /* the rk8pd reference at the located value */
+  ss_params at = PAPER;
+  at.ur = g->value;
+  ss_model m;
+  ASSERT_EQ_INT(ss_model_init(&m, &at, NULL), SS_OK);
+  double mref = ref_switching_margin(&at, &g->at, m.d0);
+  printf("ur family: grazing at ur = %.15g (precision %.2g), margin %.2g, "
+         "rk8pd margin %.2g\n",
+         g->value, g->precision, g->at.min_margin.value, mref);
+  ASSERT_TRUE(fabs(mref) < 1e-9);
+  ASSERT_TRUE(g->at.min_margin.value >= 0 && g->at.min_margin.value < 1e-9);
+  /* the overshoot orbit solved just above the located value is feasible,
+   * just below it is not */
+  ss_orbit o;
+  for (int side = -1; side <= 1; side += 2) {
+    at.ur = g->value * (1 + side * 1e-7);
+    ASSERT_EQ_INT(ss_model_init(&m, &at, NULL), SS_OK);
+    int rc = ss_orbit_solve(&m, b.n_phases, b.modes, g->at.durations, NULL, &o,
+                            NULL);
+    ASSERT_EQ_INT(rc, side > 0 ? SS_OK : SS_INFEASIBLE);
+  }
+  ss_branch_free(&b);
+}
+
+/* EVIDENCE: README "Families": the overshoot family in chi at ur = 12 us
+ * loses and regains stability through two period doublings, each located
+ * to 1e-10 where the finite-difference Jacobian of the simulated map has a
+ * multiplier within 1e-6 of -1; the family ends at a grazing at both ends */
+static void test_period_doubling(void) {
+  ss_params p = PAPER;
+  p.ur = 12 * p.us;
+  ss_orbit start;
+  ASSERT_EQ_INT(overshoot_at(&p, &start), 1);
+  ss_cont_opts co;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_CHI;
+  co.lo = 0.01;
+  co.hi = 0.99;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&p, &start, &co, &b, NULL), SS_OK);
+  double worst = 0;
+  for (int i = 0; i < b.n_points; i++)
+    worst = fmax(worst, check_point(&p, SS_PARAM_CHI, &b, &b.points[i]));
+  ASSERT_TRUE(worst < 1e-6);
+  int pd = 0, grazing = 0;
+  for (int i = 0; i < b.n_special; i++) {
+    const ss_special *s = &b.special[i];
+    if (s->kind == SS_SPECIAL_GRAZING) {
+      grazing++;
+      continue;
+    }
+    ASSERT_EQ_INT((int)s->kind, (int)SS_SPECIAL_PERIOD_DOUBLING);
+    ASSERT_TRUE(s->precision <= 1e-10);
+    ASSERT_TRUE(s->stable_before != s->stable_after);
+    /* independent: the finite-difference Jacobian of the simulated map */
+    ss_params at = p;
+    at.chi = s->value;
+    ss_model m;
+    ss_orbit o;
+    ss_stab_opts so = {0, 1};
+    ASSERT_EQ_INT(ss_model_init(&m, &at, NULL), SS_OK);
+    ASSERT_EQ_INT(
+        ss_orbit_solve(&m, b.n_phases, b.modes, s->at.durations, &so, &o, NULL),
+        SS_OK);
+    double re[2], im[2];
+    eig2(o.stab.jac_fd, re, im);
+    double off = fmin(fabs(re[0] + 1), fabs(re[1] + 1));
+    printf("period doubling at chi = %.15g (precision %.2g): finite-difference "
+           "multipliers %.12g, %.12g\n",
+           s->value, s->precision, re[0], re[1]);
+    ASSERT_TRUE(im[0] == 0 && off < 1e-6);
+    pd++;
+  }
+  ASSERT_EQ_INT(pd, 2);
+  ASSERT_EQ_INT(grazing, 2);
+  ss_branch_free(&b);
+}
+
+/* EVIDENCE: README "Families": bad options are refused, never guessed */
+static void test_bad_options(void) {
+  ss_orbit start;
+  ASSERT_EQ_INT(overshoot_at(&PAPER, &start), 1);
+  ss_cont_opts co;
+  ss_branch b;
+  ss_diag d;
+  ss_diag_clear(&d);
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_UR;
+  co.lo = 0.7; /* the start's ur = 0.6178 is outside */
+  co.hi = 1.0;
+  ASSERT_EQ_INT(ss_continue(&PAPER, &start, &co, &b, &d), SS_EINVAL);
+  ASSERT_TRUE(!strcmp(d.where, "range"));
+  co.lo = 1.0;
+  co.hi = 0.5;
+  ASSERT_EQ_INT(ss_continue(&PAPER, &start, &co, &b, &d), SS_EINVAL);
+  co.lo = 0.5;
+  co.param = (ss_param_id)7;
+  ASSERT_EQ_INT(ss_continue(&PAPER, &start, &co, &b, &d), SS_EINVAL);
+  co.param = SS_PARAM_UR;
+  co.direction = 2;
+  ASSERT_EQ_INT(ss_continue(&PAPER, &start, &co, &b, &d), SS_EINVAL);
+  co.direction = 0;
+  /* a start that is not an orbit of these parameters */
+  ss_params far = PAPER;
+  far.ur = 0.5;
+  co.lo = 0.3;
+  ASSERT_TRUE(ss_continue(&far, &start, &co, &b, &d) != SS_OK);
+  ASSERT_TRUE(b.n_points == 0 && b.points == NULL);
+  ss_param_id id;
+  ASSERT_EQ_INT(ss_param_by_name("V", &id), SS_OK);
+  ASSERT_EQ_INT((int)id, (int)SS_PARAM_V);
+  ASSERT_EQ_INT(ss_param_by_name("v", &id), SS_EINVAL);
+}
+
+/* EVIDENCE: README "Families": the time budget stops a continuation with
+ * what it found */
+static int always(void *cls) {
+  (void)cls;
+  return 1;
+}
+
+static void test_budget(void) {
+  ss_orbit start;
+  ASSERT_EQ_INT(overshoot_at(&PAPER, &start), 1);
+  ss_cont_opts co;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_UR;
+  co.lo = 0.3;
+  co.hi = 1.5;
+  co.cancelled = always;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&PAPER, &start, &co, &b, NULL), SS_ECANCELED);
+  ASSERT_EQ_INT(b.n_points, 1); /* the start */
+  ss_branch_free(&b);
+  co.cancelled = NULL;
+  co.max_points = 5;
+  ASSERT_EQ_INT(ss_continue(&PAPER, &start, &co, &b, NULL), SS_OK);
+  ASSERT_TRUE(b.n_points <= 5);
+  ASSERT_TRUE(strstr(b.end[1], "max_points") != NULL);
+  ss_branch_free(&b);
+}
+
+int main(void) {
+  gsl_set_error_handler_off();
+  test_ur_family();
+  test_period_doubling();
+  test_bad_options();
+  test_budget();
+  TEST_DONE();
+}
