@@ -200,6 +200,26 @@ typedef struct api_modes {
 } api_modes;
 extern const api_custom API_DURATIONS, API_MODES;
 
+/* "phases": [{"mode", "duration"}, ...], 2 to SS_MAX_PHASES of them, a
+ * sequence api__sequence accepts (API_PHASES decodes and echoes it). */
+typedef struct api_phases {
+  api_modes modes;
+  api_durations dur;
+} api_phases;
+extern const api_custom API_PHASES;
+
+/* "guess": {"durations": [...], "modes": [...]} (API_GUESS_SPEC); the modes
+ * default to the overshoot or stick-slip sequence by the number of
+ * durations, which api__guess_modes fills in and checks (@a ptr is the
+ * guess's pointer).  0 or -1. */
+typedef struct api_guess {
+  api_durations durations;
+  api_modes modes;
+  int has_modes;
+} api_guess;
+extern const api_spec API_GUESS_SPEC;
+int api__guess_modes(api_guess *g, const char *ptr, const api_call *c);
+
 /* "slip", "overshoot", "stick" to a mode; -1 for anything else. */
 int api__mode_of(const char *s, ss_mode *m);
 

@@ -448,3 +448,99 @@ int api__sequence(const api_modes *s, const char *ptr, const api_call *c) {
                        "%s repeats a mode in two consecutive phases", ptr);
   return 0;
 }
+
+/* ---- phases: [{"mode", "duration"}, ...] ----------------------------- */
+
+typedef struct phase_one {
+  int mode; /* ss_mode: the names below are in its order */
+  double duration;
+} phase_one;
+
+static const char *const MODE_NAMES[] = {"slip", "overshoot", "stick", NULL};
+
+static const api_field PHASE_FIELDS[] = {
+    {"mode", API_T_ENUM, API_REQUIRED, 0, 0, NULL, offsetof(phase_one, mode), 0,
+     0, 0, MODE_NAMES},
+    {"duration", API_T_NUMBER, API_REQUIRED, 0, 0, NULL,
+     offsetof(phase_one, duration)},
+};
+static const api_spec PHASE_SPEC = API_SPEC(PHASE_FIELDS);
+
+static int decode_phases(const json_t *v, const char *ptr, void *dest,
+                         const api_call *c) {
+  api_phases *s = dest;
+  if (!json_is_array(v) || json_array_size(v) < 2 ||
+      json_array_size(v) > SS_MAX_PHASES)
+    return api__fail(c->e, API_P_INVALID_TYPE, ptr,
+                     "%s must be an array of 2 to %d phases", ptr,
+                     SS_MAX_PHASES);
+  int n = (int)json_array_size(v);
+  for (int i = 0; i < n; i++) {
+    const json_t *el = json_array_get(v, (size_t)i);
+    phase_one ph;
+    char p[160];
+    snprintf(p, sizeof p, "%s/%d", ptr, i);
+    if (!json_is_object(el))
+      return api__fail(c->e, API_P_INVALID_TYPE, p,
+                       "%s must be a phase {mode, duration}", p);
+    /* an unknown mode name is reported at the phase (as clients know it) */
+    const json_t *mode = json_object_get(el, "mode");
+    ss_mode m;
+    if (json_is_string(mode) && api__mode_of(json_string_value(mode), &m))
+      return api__fail(c->e, API_P_INVALID_VALUE, p,
+                       "%s must be \"slip\", \"overshoot\" or \"stick\"", p);
+    if (api__decode(&PHASE_SPEC, el, p, &ph, c))
+      return -1;
+    if (!(ph.duration > 0))
+      return api__fail(c->e, API_P_INVALID_VALUE, p, "%s/duration must be > 0",
+                       p);
+    s->modes.m[i] = (ss_mode)ph.mode;
+    s->dur.v[i] = ph.duration;
+  }
+  s->modes.n = s->dur.n = n;
+  return api__sequence(&s->modes, ptr, c);
+}
+
+static json_t *echo_phases(const void *dest) {
+  const api_phases *s = dest;
+  json_t *a = json_array();
+  for (int k = 0; k < s->modes.n; k++) {
+    json_t *p = json_object();
+    api__set(p, "mode", json_string(ss_mode_name(s->modes.m[k])));
+    api__set(p, "duration", api__real(s->dur.v[k]));
+    json_array_append_new(a, p);
+  }
+  return a;
+}
+
+const api_custom API_PHASES = {decode_phases, echo_phases};
+
+/* ---- a guess of an orbit's durations ---------------------------------- */
+
+static const api_field GUESS_FIELDS[] = {
+    {"durations", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL,
+     offsetof(api_guess, durations), 0, 0, 0, &API_DURATIONS},
+    {"modes", API_T_CUSTOM, API_DEFAULT, 0, 0, NULL, offsetof(api_guess, modes),
+     API_HAS(api_guess, has_modes), 0, 0, &API_MODES},
+};
+const api_spec API_GUESS_SPEC = API_SPEC(GUESS_FIELDS);
+
+int api__guess_modes(api_guess *g, const char *ptr, const api_call *c) {
+  static const ss_mode ov[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
+  static const ss_mode ss[2] = {SS_MODE_SLIP, SS_MODE_STICK};
+  int n = g->durations.n;
+  char p[96];
+  snprintf(p, sizeof p, "%.80s/modes", ptr);
+  if (g->has_modes) {
+    if (g->modes.n != n)
+      return api__fail(c->e, API_P_INVALID_TYPE, p,
+                       "%s must have one entry per duration", p);
+    return api__sequence(&g->modes, p, c);
+  }
+  if (n > 3)
+    return api__fail(c->e, API_P_MISSING_FIELD, p,
+                     "a guess with more than 3 durations needs its modes");
+  memcpy(g->modes.m, n == 3 ? ov : ss, (size_t)n * sizeof(ss_mode));
+  g->modes.n = n;
+  return 0;
+}

@@ -12,17 +12,11 @@ static const char *const KINDS[] = {"overshoot", "stick-slip", "other", "all",
 static const unsigned KIND_MASK[] = {SS_ORBIT_OVERSHOOT, SS_ORBIT_STICKSLIP,
                                      SS_ORBIT_OTHER, SS_ORBIT_ALL};
 
-typedef struct orbit_guess {
-  api_durations durations;
-  api_modes modes;
-  int has_modes;
-} orbit_guess;
-
 typedef struct orbit_x {
   /* the request, in its own units */
   api_params ap;
   int kind;
-  orbit_guess guess;
+  api_guess guess;
   int has_guess;
   long long samples, effort, max_period;
   int finite_difference;
@@ -36,21 +30,12 @@ typedef struct orbit_x {
   ss_sim_result *paths; /* n sampled periods when samples > 0 */
 } orbit_x;
 
-static const api_field GUESS_FIELDS[] = {
-    {"durations", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL,
-     offsetof(orbit_guess, durations), 0, 0, 0, &API_DURATIONS},
-    {"modes", API_T_CUSTOM, API_DEFAULT, 0, 0, NULL,
-     offsetof(orbit_guess, modes), API_HAS(orbit_guess, has_modes), 0, 0,
-     &API_MODES},
-};
-static const api_spec GUESS_SPEC = API_SPEC(GUESS_FIELDS);
-
 static const api_field FIELDS[] = {
     API_PARAMS_FIELDS(orbit_x, ap),
     {"kind", API_T_ENUM, API_DEFAULT, 0, 0, NULL, offsetof(orbit_x, kind), 0, 0,
      0, KINDS},
     {"guess", API_T_OBJECT, 0, 0, 0, NULL, offsetof(orbit_x, guess),
-     API_HAS(orbit_x, has_guess), 0, 0, &GUESS_SPEC},
+     API_HAS(orbit_x, has_guess), 0, 0, &API_GUESS_SPEC},
     {"samples", API_T_COUNT, API_DEFAULT, 0, 1e9, "max_samples",
      offsetof(orbit_x, samples)},
     {"effort", API_T_COUNT, API_DEFAULT, 1, 3, NULL, offsetof(orbit_x, effort)},
@@ -60,26 +45,6 @@ static const api_field FIELDS[] = {
      offsetof(orbit_x, finite_difference)},
 };
 static const api_spec SPEC = API_SPEC(FIELDS);
-
-/* The guess's modes: as given, or by the number of durations (3: slip,
- * overshoot, stick; 2: slip, stick). */
-static int guess_modes(orbit_guess *g, const api_call *c) {
-  static const ss_mode ov[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
-  static const ss_mode ss[2] = {SS_MODE_SLIP, SS_MODE_STICK};
-  int n = g->durations.n;
-  if (g->has_modes) {
-    if (g->modes.n != n)
-      return api__fail(c->e, API_P_INVALID_TYPE, "/guess/modes",
-                       "/guess/modes must have one entry per duration");
-    return api__sequence(&g->modes, "/guess/modes", c);
-  }
-  if (n > 3)
-    return api__fail(c->e, API_P_MISSING_FIELD, "/guess/modes",
-                     "a guess with more than 3 durations needs its modes");
-  memcpy(g->modes.m, n == 3 ? ov : ss, (size_t)n * sizeof(ss_mode));
-  g->modes.n = n;
-  return 0;
-}
 
 /* Every conversion of the request's units into the core's options. */
 static void to_core(orbit_x *x, const api_limits *lim) {
@@ -115,7 +80,7 @@ int ep_orbit_decode(const json_t *root, const api_call *c, void **xp) {
   x->max_period = 4;
   x->finite_difference = 1;
   if (api__decode_request(&SPEC, root, x, &x->ap, c) ||
-      (x->has_guess && guess_modes(&x->guess, c)))
+      (x->has_guess && api__guess_modes(&x->guess, "/guess", c)))
     return -1;
   to_core(x, c->lim);
   cancel_hook(&x->opts, c);

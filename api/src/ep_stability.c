@@ -9,26 +9,15 @@
 
 #include "endpoints.h"
 
-/* "phases": [{"mode", "duration"}, ...]. */
-typedef struct stab_phases {
-  api_modes modes;
-  api_durations dur;
-} stab_phases;
-
-typedef struct stab_phase {
-  int mode; /* ss_mode: the names below are in its order */
-  double duration;
-} stab_phase;
-
 typedef struct stab_orbit {
-  stab_phases phases;
+  api_phases phases;
   double z0[4];
 } stab_orbit;
 
 typedef struct stab_x {
   /* the request, in its own units */
   api_params ap;
-  stab_phases phases;
+  api_phases phases;
   double z0[4];
   stab_orbit orbit;
   int has_orbit;
@@ -43,70 +32,11 @@ typedef struct stab_x {
   ss_diag why; /* why it is not feasible */
 } stab_x;
 
-static const char *const MODE_NAMES[] = {"slip", "overshoot", "stick", NULL};
-
-static const api_field PHASE_FIELDS[] = {
-    {"mode", API_T_ENUM, API_REQUIRED, 0, 0, NULL, offsetof(stab_phase, mode),
-     0, 0, 0, MODE_NAMES},
-    {"duration", API_T_NUMBER, API_REQUIRED, 0, 0, NULL,
-     offsetof(stab_phase, duration)},
-};
-static const api_spec PHASE_SPEC = API_SPEC(PHASE_FIELDS);
-
-static int decode_phases(const json_t *v, const char *ptr, void *dest,
-                         const api_call *c) {
-  stab_phases *s = dest;
-  if (!json_is_array(v) || json_array_size(v) < 2 ||
-      json_array_size(v) > SS_MAX_PHASES)
-    return api__fail(c->e, API_P_INVALID_TYPE, ptr,
-                     "%s must be an array of 2 to %d phases", ptr,
-                     SS_MAX_PHASES);
-  int n = (int)json_array_size(v);
-  for (int i = 0; i < n; i++) {
-    const json_t *el = json_array_get(v, (size_t)i);
-    stab_phase ph;
-    char p[160];
-    snprintf(p, sizeof p, "%s/%d", ptr, i);
-    if (!json_is_object(el))
-      return api__fail(c->e, API_P_INVALID_TYPE, p,
-                       "%s must be a phase {mode, duration}", p);
-    /* an unknown mode name is reported at the phase (as clients know it) */
-    const json_t *mode = json_object_get(el, "mode");
-    ss_mode m;
-    if (json_is_string(mode) && api__mode_of(json_string_value(mode), &m))
-      return api__fail(c->e, API_P_INVALID_VALUE, p,
-                       "%s must be \"slip\", \"overshoot\" or \"stick\"", p);
-    if (api__decode(&PHASE_SPEC, el, p, &ph, c))
-      return -1;
-    if (!(ph.duration > 0))
-      return api__fail(c->e, API_P_INVALID_VALUE, p, "%s/duration must be > 0",
-                       p);
-    s->modes.m[i] = (ss_mode)ph.mode;
-    s->dur.v[i] = ph.duration;
-  }
-  s->modes.n = s->dur.n = n;
-  return api__sequence(&s->modes, ptr, c);
-}
-
-static json_t *echo_phases(const void *dest) {
-  const stab_phases *s = dest;
-  json_t *a = json_array();
-  for (int k = 0; k < s->modes.n; k++) {
-    json_t *p = json_object();
-    api__set(p, "mode", json_string(ss_mode_name(s->modes.m[k])));
-    api__set(p, "duration", api__real(s->dur.v[k]));
-    json_array_append_new(a, p);
-  }
-  return a;
-}
-
-static const api_custom PHASES = {decode_phases, echo_phases};
-
 /* An orbit as /orbit returns it: its phases and start z0 are used. */
 #define PHASES_FIELD                                                           \
   {                                                                            \
     "phases", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL,                          \
-        offsetof(stab_orbit, phases), 0, 0, 0, &PHASES                         \
+        offsetof(stab_orbit, phases), 0, 0, 0, &API_PHASES                     \
   }
 #define Z0_FIELD                                                               \
   { "z0", API_T_VEC4, API_REQUIRED, 0, 0, NULL, offsetof(stab_orbit, z0) }
@@ -117,7 +47,7 @@ static const api_spec ORBIT_SPEC = API_SPEC(ORBIT_FIELDS);
 static const api_field FIELDS[] = {
     API_PARAMS_FIELDS(stab_x, ap),
     {"phases", API_T_CUSTOM, API_REQUIRED | API_DEFAULT, 0, 0, NULL,
-     offsetof(stab_x, phases), 0, 2, 0, &PHASES},
+     offsetof(stab_x, phases), 0, 2, 0, &API_PHASES},
     {"z0", API_T_VEC4, API_REQUIRED | API_DEFAULT, 0, 0, NULL,
      offsetof(stab_x, z0), 0, 2, 0},
     {"orbit", API_T_OBJECT, API_REQUIRED | API_ECHO_NEVER, 0, 0, NULL,
