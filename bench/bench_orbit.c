@@ -93,6 +93,41 @@ static double sim_1000(void) {
   return r.x[0];
 }
 
+/* Families: the paper's in ur up from the start (no special point), the
+ * same down to its grazing and up, and the chi family at ur = 12 us (two
+ * period doublings, two grazings). */
+static int family(const ss_params *p, const ss_orbit *start, ss_param_id id,
+                  double lo, double hi, int direction, int *n_special) {
+  ss_cont_opts co;
+  ss_branch b;
+  memset(&co, 0, sizeof co);
+  co.param = id;
+  co.lo = lo;
+  co.hi = hi;
+  co.direction = direction;
+  co.max_points = 1000;
+  ss_continue(p, start, &co, &b, NULL);
+  int n = b.n_points;
+  if (n_special)
+    *n_special = b.n_special;
+  ss_branch_free(&b);
+  return n;
+}
+
+static const ss_params PAPER = {0.2, 4.0, 0.0724, 0.6178, 1.0};
+static ss_params P12 = {0.2, 4.0, 0.0724, 12 * 0.0724, 1.0};
+static ss_orbit START12;
+
+static double family_up(void) {
+  return family(&PAPER, &ORB, SS_PARAM_UR, 0.3, 1.5, 1, NULL);
+}
+static double family_ur(void) {
+  return family(&PAPER, &ORB, SS_PARAM_UR, 0.3, 1.5, 0, NULL);
+}
+static double family_chi(void) {
+  return family(&P12, &START12, SS_PARAM_CHI, 0.01, 0.99, 0, NULL);
+}
+
 int main(int argc, char **argv) {
   const char *dir = argc > 1 ? argv[1] : "bench/results";
   ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
@@ -101,11 +136,38 @@ int main(int argc, char **argv) {
   gsl_set_error_handler_off();
   ss_model_init(&M, &p, NULL);
   ss_orbit_solve(&M, 3, modes, guess, NULL, &ORB, NULL);
+  {
+    ss_model m12;
+    ss_orbit_opts oo;
+    int n = 0;
+    memset(&oo, 0, sizeof oo);
+    oo.kinds = SS_ORBIT_OVERSHOOT;
+    ss_model_init(&m12, &P12, NULL);
+    ss_orbit_find(&m12, &oo, &START12, 1, &n, NULL, NULL);
+  }
+  int sp_ur = 0, sp_chi = 0;
+  int n_up = family(&PAPER, &ORB, SS_PARAM_UR, 0.3, 1.5, 1, NULL);
+  int n_ur = family(&PAPER, &ORB, SS_PARAM_UR, 0.3, 1.5, 0, &sp_ur);
+  int n_chi = family(&P12, &START12, SS_PARAM_CHI, 0.01, 0.99, 0, &sp_chi);
+  char w_up[160], w_ur[160], w_chi[160];
+  snprintf(w_up, sizeof w_up,
+           "continue the paper's family in ur up to 1.5 (%d points, no "
+           "special point)",
+           n_up);
+  snprintf(w_ur, sizeof w_ur,
+           "continue it both ways over ur in [0.3, 1.5] (%d points, %d "
+           "special: the grazing located)",
+           n_ur, sp_ur);
+  snprintf(w_chi, sizeof w_chi,
+           "continue the family in chi at ur = 12 us (%d points, %d special: "
+           "2 period doublings, 2 grazings)",
+           n_chi, sp_chi);
   struct {
     const char *what;
     job_fn fn;
     int runs;
     const char *target;
+    int per; /* > 0: also the time per point */
   } jobs[] = {
       {"find the paper's orbit from a guess (no finite differences)",
        find_guess, RUNS, "< 20 us"},
@@ -121,6 +183,9 @@ int main(int argc, char **argv) {
        RUNS, ""},
       {"simulate 1000 periods (3000 events), final state only", sim_1000, 21,
        "< 1 ms (1 us per period)"},
+      {w_up, family_up, 51, "< 30 us per point", n_up},
+      {w_ur, family_ur, 51, "", n_ur},
+      {w_chi, family_chi, 51, "", n_chi},
   };
   char path[512];
   snprintf(path, sizeof path, "%s/orbit.md", dir);
@@ -138,9 +203,13 @@ int main(int argc, char **argv) {
     timed(jobs[i].fn, jobs[i].runs, &med);
     const char *unit = med < 1e-3 ? "us" : "ms";
     double v = med < 1e-3 ? med * 1e6 : med * 1e3;
-    printf("%-75s %9.2f %s\n", jobs[i].what, v, unit);
-    fprintf(f, "| %s | %d | %.2f %s | %s |\n", jobs[i].what, jobs[i].runs, v,
-            unit, jobs[i].target);
+    char per[64] = "";
+    if (jobs[i].per > 0)
+      snprintf(per, sizeof per, " (%.1f us per point)",
+               med / jobs[i].per * 1e6);
+    printf("%-75s %9.2f %s%s\n", jobs[i].what, v, unit, per);
+    fprintf(f, "| %s | %d | %.2f %s%s | %s |\n", jobs[i].what, jobs[i].runs, v,
+            unit, per, jobs[i].target);
   }
   fclose(f);
   printf("wrote %s\n", path);

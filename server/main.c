@@ -46,6 +46,8 @@ static const flag FLAGS[] = {
     {"--max-depth", F_INT, 2, 2048, CFG(lim.max_depth), "JSON nesting depth"},
     {"--max-batch-items", F_SIZE, 1, 1e7, CFG(lim.max_batch_items),
      "requests in one /batch"},
+    {"--max-points", F_SIZE, 2, 1e6, CFG(lim.max_points),
+     "points of one /continue family"},
     {"--batch-parallel", F_UNSIGNED, 1, 1024, CFG(batch_parallel),
      "items of one /batch in flight at once (default: workers)"},
     {"--workers", F_UNSIGNED, 1, 1024, CFG(workers),

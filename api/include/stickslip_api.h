@@ -32,6 +32,7 @@ typedef struct api_limits {
   int max_orbits;         /**< orbits in one /orbit response */
   int max_depth;          /**< JSON nesting depth */
   size_t max_batch_items; /**< requests in one /batch */
+  size_t max_points;      /**< points of one /continue family */
 } api_limits;
 
 /** Fill @a l with the defaults documented in the README. */

@@ -121,6 +121,8 @@ static double limit_of(const api_limits *l, const char *name) {
     return (double)l->max_samples;
   if (strcmp(name, "max_events") == 0)
     return (double)l->max_events;
+  if (strcmp(name, "max_points") == 0)
+    return (double)l->max_points;
   return INFINITY;
 }
 

@@ -57,6 +57,7 @@ void api_limits_default(api_limits *l) {
   l->max_orbits = 32;
   l->max_depth = 32;
   l->max_batch_items = 10000;
+  l->max_points = 2000;
 }
 
 const char *api_version(void) { return SS_VERSION; }

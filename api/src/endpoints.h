@@ -37,6 +37,9 @@
   X(STABILITY, "POST", "/stability", "stability", API_RUN_COMPUTE,             \
     ep_stability_decode, ep_stability_run, ep_stability_encode,                \
     ep_stability_release)                                                      \
+  X(CONTINUE, "POST", "/continue", "continue", API_RUN_COMPUTE,                \
+    ep_continue_decode, ep_continue_run, ep_continue_encode,                   \
+    ep_continue_release)                                                       \
   X(BATCH, "POST", "/batch", "batch", API_RUN_BATCH, ep_batch_decode,          \
     ep_batch_run, ep_batch_encode, ep_batch_release)                           \
   X(HEALTH, "GET", "/health", "health", API_RUN_INLINE, ep_meta_decode,        \

@@ -1036,6 +1036,8 @@ static void test_flag_limits(void) {
                         "10",
                         "--max-horizon",
                         "1e9",
+                        "--max-points",
+                        "10",
                         NULL};
   ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
   PORT = d.port;
@@ -1050,6 +1052,10 @@ static void test_flag_limits(void) {
       {"max-samples", "/simulate",
        "{" PAPER ",\"initial\":" X0 ",\"t_end\":10,\"samples\":{\"n\":11}}",
        "max_samples", 10, "/samples/n"},
+      {"max-points", "/continue",
+       "{" PAPER ",\"guess\":{\"durations\":[4.4975,2.7227,3.0513]},"
+       "\"parameter\":\"ur\",\"range\":[0.3,1.5],\"max_points\":11}",
+       "max_points", 10, "/max_points"},
   };
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     json_t *j = expect_problem(cases[i].name, "POST", cases[i].path, JSON,

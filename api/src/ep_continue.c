@@ -1,0 +1,265 @@
+/*
+ * ep_continue.c: POST /continue, a family of periodic orbits followed in
+ * one dimensionless parameter from a starting orbit (as /orbit returns it)
+ * or a guess, with its grazing, folds and multiplier crossings located
+ * (ss_continue).
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "endpoints.h"
+
+static const char *const PARAMS[] = {"chi", "eta", "us", "ur", "V", NULL};
+static const char *const DIRECTIONS[] = {"both", "up", "down", NULL};
+static const int DIRECTION_OF[] = {0, 1, -1};
+
+typedef struct cont_range {
+  double lo, hi;
+} cont_range;
+
+typedef struct cont_orbit {
+  api_phases phases;
+} cont_orbit;
+
+typedef struct cont_x {
+  /* the request */
+  api_params ap;
+  cont_orbit orbit;
+  int has_orbit;
+  api_guess guess;
+  int has_guess;
+  int parameter;
+  cont_range range;
+  long long max_points;
+  double step;
+  int direction;
+  /* for the core */
+  ss_orbit start;
+  ss_cont_opts opts;
+  /* the answer */
+  ss_branch b;
+  int rc;
+} cont_x;
+
+static int decode_range(const json_t *v, const char *ptr, void *dest,
+                        const api_call *c) {
+  cont_range *r = dest;
+  double two[2];
+  if (!json_is_array(v) || json_array_size(v) != 2)
+    return api__fail(c->e, API_P_INVALID_TYPE, ptr,
+                     "%s must be [lo, hi], two numbers", ptr);
+  if (api__numbers(v, ptr, two, c->e))
+    return -1;
+  if (!(two[0] < two[1]))
+    return api__fail(c->e, API_P_INVALID_VALUE, ptr,
+                     "%s must be [lo, hi] with lo < hi", ptr);
+  r->lo = two[0];
+  r->hi = two[1];
+  return 0;
+}
+
+static json_t *echo_range(const void *dest) {
+  const cont_range *r = dest;
+  json_t *a = json_array();
+  json_array_append_new(a, api__real(r->lo));
+  json_array_append_new(a, api__real(r->hi));
+  return a;
+}
+
+static const api_custom RANGE = {decode_range, echo_range};
+
+#define PHASES_FIELD                                                           \
+  {                                                                            \
+    "phases", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL,                          \
+        offsetof(cont_orbit, phases), 0, 0, 0, &API_PHASES                     \
+  }
+static const api_field ORBIT_FIELDS[] = {
+    API_ORBIT_FIELDS(API_ANY("x0"), API_ANY("z0"), PHASES_FIELD)};
+static const api_spec ORBIT_SPEC = API_SPEC(ORBIT_FIELDS);
+
+static const api_field FIELDS[] = {
+    API_PARAMS_FIELDS(cont_x, ap),
+    {"orbit", API_T_OBJECT, API_REQUIRED | API_ECHO_NEVER, 0, 0, NULL,
+     offsetof(cont_x, orbit), API_HAS(cont_x, has_orbit), 2, 0, &ORBIT_SPEC},
+    {"guess", API_T_OBJECT, API_REQUIRED, 0, 0, NULL, offsetof(cont_x, guess),
+     API_HAS(cont_x, has_guess), 2, 1, &API_GUESS_SPEC},
+    {"parameter", API_T_ENUM, API_REQUIRED, 0, 0, NULL,
+     offsetof(cont_x, parameter), 0, 0, 0, PARAMS},
+    {"range", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL, offsetof(cont_x, range),
+     0, 0, 0, &RANGE},
+    {"max_points", API_T_COUNT, API_DEFAULT, 2, 1e9, "max_points",
+     offsetof(cont_x, max_points)},
+    {"step", API_T_NUMBER, API_DEFAULT, 1e-6, 0.2, NULL,
+     offsetof(cont_x, step)},
+    {"direction", API_T_ENUM, API_DEFAULT, 0, 0, NULL,
+     offsetof(cont_x, direction), 0, 0, 0, DIRECTIONS},
+};
+static const api_spec SPEC = API_SPEC(FIELDS);
+
+int ep_continue_decode(const json_t *root, const api_call *c, void **xp) {
+  cont_x *x = api__alloc(sizeof *x, xp, c);
+  if (!x)
+    return -1;
+  x->max_points = 200;
+  x->step = 0.02;
+  if (api__decode_request(&SPEC, root, x, &x->ap, c) ||
+      (x->has_guess && api__guess_modes(&x->guess, "/guess", c)))
+    return -1;
+  if (x->ap.has_physical)
+    return api__fail(c->e, API_P_INVALID_VALUE, "/physical",
+                     "/continue follows a dimensionless parameter: give "
+                     "\"params\" (see /orbit's input.params for the "
+                     "dimensionless form of physical parameters)");
+  const api_modes *modes =
+      x->has_orbit ? &x->orbit.phases.modes : &x->guess.modes;
+  const api_durations *dur =
+      x->has_orbit ? &x->orbit.phases.dur : &x->guess.durations;
+  x->start.n_phases = modes->n;
+  memcpy(x->start.modes, modes->m, (size_t)modes->n * sizeof(ss_mode));
+  memcpy(x->start.durations, dur->v, (size_t)dur->n * sizeof(double));
+  ss_cont_opts *o = &x->opts;
+  o->param = (ss_param_id)x->parameter;
+  o->lo = x->range.lo;
+  o->hi = x->range.hi;
+  o->max_points = (int)x->max_points;
+  o->step = x->step;
+  o->direction = DIRECTION_OF[x->direction];
+  o->max_seconds = c->lim->max_seconds;
+  if (c->srv && c->srv->cancelled) {
+    o->cancelled = c->srv->cancelled;
+    o->cancel_cls = c->srv->cancel_cls;
+  }
+  const ss_params *p = &x->ap.p;
+  const double values[] = {p->chi, p->eta, p->us, p->ur, p->V};
+  double v0 = values[x->parameter];
+  if (!(v0 >= o->lo && v0 <= o->hi))
+    return api__fail(c->e, API_P_INVALID_VALUE, "/range",
+                     "/range [%.15g, %.15g] must contain the start's %s = "
+                     "%.15g",
+                     o->lo, o->hi, PARAMS[x->parameter], v0);
+  return 0;
+}
+
+int ep_continue_run(void *xp, const api_call *c) {
+  cont_x *x = xp;
+  ss_diag d;
+  ss_diag_clear(&d);
+  x->rc = ss_continue(&x->ap.p, &x->start, &x->opts, &x->b, &d);
+  if (x->rc == SS_OK)
+    return 0;
+  if (x->rc == SS_ELIMIT_TIME)
+    return api__status_limit(c->e, x->rc, "max_seconds", c->lim->max_seconds,
+                             "",
+                             "the continuation needed more than %g s; narrow "
+                             "the range or lower max_points",
+                             c->lim->max_seconds);
+  if (x->rc == SS_INFEASIBLE || x->rc == SS_ENOCONV || x->rc == SS_ESINGULAR)
+    return api__fail(c->e, API_P_INVALID_VALUE,
+                     x->has_orbit ? "/orbit" : "/guess",
+                     "the starting orbit is not a feasible orbit of these "
+                     "parameters: %s",
+                     d.text[0] ? d.text : ss_strerror(x->rc));
+  return api__from_diag(c->e, x->rc, &d, "");
+}
+
+static json_t *multipliers(const double re[2], const double im[2]) {
+  json_t *a = json_array();
+  for (int k = 0; k < 2; k++) {
+    json_t *m = json_array();
+    json_array_append_new(m, api__real(re[k]));
+    json_array_append_new(m, api__real(im[k]));
+    json_array_append_new(a, m);
+  }
+  return a;
+}
+
+static json_t *margin(const ss_margin *mg) {
+  json_t *o = json_object();
+  api__set(o, "value", api__real(mg->value));
+  if (mg->phase >= 0) {
+    api__set(o, "phase", json_integer(mg->phase));
+    api__set(o, "t", api__real(mg->t));
+  }
+  return o;
+}
+
+static json_t *point(const ss_cont_point *p, int n) {
+  json_t *o = json_object();
+  api__set(o, "value", api__real(p->value));
+  api__set(o, "period", api__real(p->period));
+  api__set(o, "durations", api__vec(p->durations, n));
+  api__set(o, "z0", api__vec4(p->z0));
+  api__set(o, "n_turns", json_integer(p->n_turns));
+  api__set(o, "spectral_radius", api__real(p->spectral_radius));
+  api__set(o, "multipliers", multipliers(p->eig_re, p->eig_im));
+  api__set(o, "stable", json_boolean(p->stable));
+  api__set(o, "min_margin", margin(&p->min_margin));
+  api__set(o, "residual", api__real(p->residual));
+  return o;
+}
+
+int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
+  const cont_x *x = xp;
+  const ss_branch *b = &x->b;
+  json_t *br = json_object();
+  api__set(
+      br, "kind",
+      json_string(ss_orbit_kind_name(ss_orbit_kind_of(b->n_phases, b->modes))));
+  json_t *modes = json_array();
+  for (int k = 0; k < b->n_phases; k++)
+    json_array_append_new(modes, json_string(ss_mode_name(b->modes[k])));
+  api__set(br, "modes", modes);
+  json_t *pts = json_array();
+  for (int i = 0; i < b->n_points; i++)
+    json_array_append_new(pts, point(&b->points[i], b->n_phases));
+  api__set(br, "points", pts);
+  api__set(br, "start", json_integer(b->start));
+  json_t *sp = json_array();
+  for (int i = 0; i < b->n_special; i++) {
+    const ss_special *s = &b->special[i];
+    json_t *o = json_object();
+    api__set(o, "type", json_string(ss_special_name(s->kind)));
+    api__set(o, "value", api__real(s->value));
+    api__set(o, "precision", api__real(s->precision));
+    if (s->kind == SS_SPECIAL_GRAZING) {
+      api__set(o, "margin", json_string(s->margin));
+      api__set(o, "phase", json_integer(s->at.min_margin.phase));
+      api__set(o, "t", api__real(s->at.min_margin.t));
+      api__set(o, "margin_value", api__real(s->at.min_margin.value));
+    }
+    api__set(o, "multipliers", multipliers(s->at.eig_re, s->at.eig_im));
+    api__set(o, "stable_before", json_boolean(s->stable_before));
+    api__set(o, "stable_after", json_boolean(s->stable_after));
+    api__set(o, "detail", json_string(s->detail));
+    api__set(o, "orbit", point(&s->at, b->n_phases));
+    json_array_append_new(sp, o);
+  }
+  api__set(br, "special", sp);
+  json_t *ends = json_object();
+  if (b->end[0][0])
+    api__set(ends, "down", json_string(b->end[0]));
+  if (b->end[1][0])
+    api__set(ends, "up", json_string(b->end[1]));
+  char end[400];
+  snprintf(end, sizeof end, "%s%s%s", b->end[0][0] ? b->end[0] : "",
+           b->end[0][0] && b->end[1][0] ? "; " : "",
+           b->end[1][0] ? b->end[1] : "");
+  api__set(br, "end", json_string(end));
+  api__set(br, "ends", ends);
+  json_t *o = json_object();
+  json_t *branches = json_array();
+  json_array_append_new(branches, br);
+  api__set(o, "branches", branches);
+  api__set(o, "curves", json_array());
+  api__set(o, "parameter", json_string(PARAMS[x->parameter]));
+  return api__answer(o, &SPEC, x, &x->ap, c, out);
+}
+
+void ep_continue_release(void *xp) {
+  cont_x *x = xp;
+  if (!x)
+    return;
+  ss_branch_free(&x->b);
+  free(x);
+}
