@@ -128,6 +128,24 @@ static double family_chi(void) {
   return family(&P12, &START12, SS_PARAM_CHI, 0.01, 0.99, 0, NULL);
 }
 
+/* The paper family's grazing followed in chi over [0.05, 0.6]. */
+static ss_branch DOWN;
+static int curve_points(void) {
+  ss_cont_opts o2;
+  ss_curve cv;
+  memset(&o2, 0, sizeof o2);
+  o2.param = SS_PARAM_CHI;
+  o2.lo = 0.05;
+  o2.hi = 0.6;
+  o2.max_points = 1000;
+  ss_continue_grazing(&PAPER, &DOWN, &DOWN.special[0], SS_PARAM_UR, 0.3, 1.5,
+                      &o2, &cv, NULL);
+  int n = cv.n_points;
+  ss_curve_free(&cv);
+  return n;
+}
+static double boundary_curve(void) { return curve_points(); }
+
 int main(int argc, char **argv) {
   const char *dir = argc > 1 ? argv[1] : "bench/results";
   ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
@@ -149,7 +167,21 @@ int main(int argc, char **argv) {
   int n_up = family(&PAPER, &ORB, SS_PARAM_UR, 0.3, 1.5, 1, NULL);
   int n_ur = family(&PAPER, &ORB, SS_PARAM_UR, 0.3, 1.5, 0, &sp_ur);
   int n_chi = family(&P12, &START12, SS_PARAM_CHI, 0.01, 0.99, 0, &sp_chi);
-  char w_up[160], w_ur[160], w_chi[160];
+  {
+    ss_cont_opts co;
+    memset(&co, 0, sizeof co);
+    co.param = SS_PARAM_UR;
+    co.lo = 0.3;
+    co.hi = 1.5;
+    co.direction = -1;
+    ss_continue(&PAPER, &ORB, &co, &DOWN, NULL);
+  }
+  int n_curve = curve_points();
+  char w_up[160], w_ur[160], w_chi[160], w_curve[160];
+  snprintf(w_curve, sizeof w_curve,
+           "the boundary ur*(chi): the grazing followed in chi over [0.05, "
+           "0.6] (%d points)",
+           n_curve);
   snprintf(w_up, sizeof w_up,
            "continue the paper's family in ur up to 1.5 (%d points, no "
            "special point)",
@@ -186,6 +218,7 @@ int main(int argc, char **argv) {
       {w_up, family_up, 51, "< 30 us per point", n_up},
       {w_ur, family_ur, 51, "", n_ur},
       {w_chi, family_chi, 51, "", n_chi},
+      {w_curve, boundary_curve, 21, "", n_curve},
   };
   char path[512];
   snprintf(path, sizeof path, "%s/orbit.md", dir);

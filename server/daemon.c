@@ -67,6 +67,7 @@ struct srv_daemon {
   conn *conns;
   pthread_t monitor;
   atomic_int monitor_stop;
+  atomic_ulong conns_started; /* taken up by libmicrohttpd */
   int monitor_running;
 };
 
@@ -959,6 +960,7 @@ static void connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
   struct srv_daemon *d = cls;
   conn *cn = *socket_ctx;
   if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
+    atomic_fetch_add(&d->conns_started, 1);
     const union MHD_ConnectionInfo *ci =
         MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
     if (!ci || !(cn = calloc(1, sizeof *cn)))
@@ -1128,6 +1130,10 @@ int srv_add_connection(struct srv_daemon *d, int fd,
   return MHD_add_connection(d->mhd, fd, addr, (socklen_t)addrlen) == MHD_YES
              ? 0
              : -1;
+}
+
+unsigned long srv_connections_started(struct srv_daemon *d) {
+  return atomic_load(&d->conns_started);
 }
 
 static void wait_in_flight(struct srv_daemon *d, double until) {

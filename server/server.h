@@ -128,6 +128,11 @@ struct srv_daemon *srv_start(const srv_config *cfg);
 struct sockaddr;
 int srv_add_connection(struct srv_daemon *d, int fd,
                        const struct sockaddr *addr, unsigned addrlen);
+
+/* Connections libmicrohttpd has started serving (NOTIFY_CONNECTION), since
+ * the daemon started: a connection handed over by srv_add_connection
+ * counts once the daemon's thread has taken it up. */
+unsigned long srv_connections_started(struct srv_daemon *d);
 /** The text of the IPv4 or IPv6 address @a s as the daemon writes a
  *  client's address (inet_ntop), into @a out; 0, or -1 when @a s is not
  *  an address. */

@@ -22,6 +22,15 @@ typedef struct cont_orbit {
   api_phases phases;
 } cont_orbit;
 
+/* follow: {"special": "grazing", "parameter": name, "range": [lo, hi]} */
+static const char *const SPECIALS[] = {"grazing", NULL};
+
+typedef struct cont_follow {
+  int special;
+  int parameter;
+  cont_range range;
+} cont_follow;
+
 typedef struct cont_x {
   /* the request */
   api_params ap;
@@ -34,12 +43,16 @@ typedef struct cont_x {
   long long max_points;
   double step;
   int direction;
+  cont_follow follow;
+  int has_follow;
   /* for the core */
   ss_orbit start;
   ss_cont_opts opts;
   /* the answer */
   ss_branch b;
   int rc;
+  ss_curve curves[SS_MAX_SPECIAL];
+  int n_curves;
 } cont_x;
 
 static int decode_range(const json_t *v, const char *ptr, void *dest,
@@ -78,6 +91,16 @@ static const api_field ORBIT_FIELDS[] = {
     API_ORBIT_FIELDS(API_ANY("x0"), API_ANY("z0"), PHASES_FIELD)};
 static const api_spec ORBIT_SPEC = API_SPEC(ORBIT_FIELDS);
 
+static const api_field FOLLOW_FIELDS[] = {
+    {"special", API_T_ENUM, API_REQUIRED, 0, 0, NULL,
+     offsetof(cont_follow, special), 0, 0, 0, SPECIALS},
+    {"parameter", API_T_ENUM, API_REQUIRED, 0, 0, NULL,
+     offsetof(cont_follow, parameter), 0, 0, 0, PARAMS},
+    {"range", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL,
+     offsetof(cont_follow, range), 0, 0, 0, &RANGE},
+};
+static const api_spec FOLLOW_SPEC = API_SPEC(FOLLOW_FIELDS);
+
 static const api_field FIELDS[] = {
     API_PARAMS_FIELDS(cont_x, ap),
     {"orbit", API_T_OBJECT, API_REQUIRED | API_ECHO_NEVER, 0, 0, NULL,
@@ -94,6 +117,8 @@ static const api_field FIELDS[] = {
      offsetof(cont_x, step)},
     {"direction", API_T_ENUM, API_DEFAULT, 0, 0, NULL,
      offsetof(cont_x, direction), 0, 0, 0, DIRECTIONS},
+    {"follow", API_T_OBJECT, 0, 0, 0, NULL, offsetof(cont_x, follow),
+     API_HAS(cont_x, has_follow), 0, 0, &FOLLOW_SPEC},
 };
 static const api_spec SPEC = API_SPEC(FIELDS);
 
@@ -133,6 +158,17 @@ int ep_continue_decode(const json_t *root, const api_call *c, void **xp) {
   const ss_params *p = &x->ap.p;
   const double values[] = {p->chi, p->eta, p->us, p->ur, p->V};
   double v0 = values[x->parameter];
+  if (x->has_follow) {
+    double v2 = values[x->follow.parameter];
+    if (x->follow.parameter == x->parameter)
+      return api__fail(c->e, API_P_INVALID_VALUE, "/follow/parameter",
+                       "/follow/parameter must differ from /parameter");
+    if (!(v2 >= x->follow.range.lo && v2 <= x->follow.range.hi))
+      return api__fail(c->e, API_P_INVALID_VALUE, "/follow/range",
+                       "/follow/range [%.15g, %.15g] must contain %s = %.15g",
+                       x->follow.range.lo, x->follow.range.hi,
+                       PARAMS[x->follow.parameter], v2);
+  }
   if (!(v0 >= o->lo && v0 <= o->hi))
     return api__fail(c->e, API_P_INVALID_VALUE, "/range",
                      "/range [%.15g, %.15g] must contain the start's %s = "
@@ -146,6 +182,29 @@ int ep_continue_run(void *xp, const api_call *c) {
   ss_diag d;
   ss_diag_clear(&d);
   x->rc = ss_continue(&x->ap.p, &x->start, &x->opts, &x->b, &d);
+  if (x->rc == SS_OK && x->has_follow) {
+    /* each grazing of the switching condition, in the second parameter,
+     * with what is left of the time budget */
+    ss_cont_opts o2 = x->opts;
+    o2.param = (ss_param_id)x->follow.parameter;
+    o2.lo = x->follow.range.lo;
+    o2.hi = x->follow.range.hi;
+    o2.direction = 0;
+    for (int i = 0; i < x->b.n_special && x->rc == SS_OK; i++) {
+      const ss_special *g = &x->b.special[i];
+      if (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "switching"))
+        continue;
+      ss_curve *cv = &x->curves[x->n_curves];
+      int rc = ss_continue_grazing(&x->ap.p, &x->b, g, x->opts.param,
+                                   x->opts.lo, x->opts.hi, &o2, cv, &d);
+      if (rc == SS_OK)
+        x->n_curves++;
+      else if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED || rc == SS_ENOMEM)
+        x->rc = rc;
+      else
+        ss_curve_free(cv); /* this grazing has no curve: none is listed */
+    }
+  }
   if (x->rc == SS_OK)
     return 0;
   if (x->rc == SS_ELIMIT_TIME)
@@ -251,7 +310,37 @@ int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
   json_t *branches = json_array();
   json_array_append_new(branches, br);
   api__set(o, "branches", branches);
-  api__set(o, "curves", json_array());
+  json_t *curves = json_array();
+  for (int i = 0; i < x->n_curves; i++) {
+    const ss_curve *cv = &x->curves[i];
+    const char *n1 = PARAMS[cv->p1], *n2 = PARAMS[cv->p2];
+    json_t *co = json_object(), *names = json_array(), *cp = json_array();
+    api__set(co, "type", json_string(ss_special_name(cv->kind)));
+    api__set(co, "margin", json_string(cv->margin));
+    api__set(co, "phase", json_integer(cv->phase));
+    json_array_append_new(names, json_string(n1));
+    json_array_append_new(names, json_string(n2));
+    api__set(co, "parameters", names);
+    for (int k = 0; k < cv->n_points; k++) {
+      json_t *q = json_object();
+      api__set(q, n1, api__real(cv->points[k].v1));
+      api__set(q, n2, api__real(cv->points[k].v2));
+      api__set(
+          q, "feasible_side",
+          json_string(cv->points[k].feasible_side > 0 ? "above" : "below"));
+      json_array_append_new(cp, q);
+    }
+    api__set(co, "points", cp);
+    api__set(co, "start", json_integer(cv->start));
+    json_t *ce = json_object();
+    if (cv->end[0][0])
+      api__set(ce, "down", json_string(cv->end[0]));
+    if (cv->end[1][0])
+      api__set(ce, "up", json_string(cv->end[1]));
+    api__set(co, "ends", ce);
+    json_array_append_new(curves, co);
+  }
+  api__set(o, "curves", curves);
   api__set(o, "parameter", json_string(PARAMS[x->parameter]));
   return api__answer(o, &SPEC, x, &x->ap, c, out);
 }
@@ -261,5 +350,7 @@ void ep_continue_release(void *xp) {
   if (!x)
     return;
   ss_branch_free(&x->b);
+  for (int i = 0; i < x->n_curves; i++)
+    ss_curve_free(&x->curves[i]);
   free(x);
 }

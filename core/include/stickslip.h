@@ -874,6 +874,49 @@ SS_API int ss_continue(const ss_params *p, const ss_orbit *start,
 /** Release what ss_continue() allocated.  NULL-safe; zeroes @a b. */
 SS_API void ss_branch_free(ss_branch *b);
 
+/** A point of a curve of special points in two parameters. */
+typedef struct ss_curve_point {
+  double v1, v2;                   /**< the first and second parameter */
+  double durations[SS_MAX_PHASES]; /**< the orbit there */
+  double z0[4];
+  /** The side of v1 on which the orbit exists: +1 above, -1 below */
+  int feasible_side;
+} ss_curve_point;
+
+/** A curve of special points: where a family's grazing moves as a second
+ *  parameter changes. */
+typedef struct ss_curve {
+  ss_special_kind kind; /**< SS_SPECIAL_GRAZING */
+  char margin[24];      /**< the margin that is zero along it */
+  int phase;            /**< at the end of this phase */
+  ss_param_id p1, p2;
+  int n_points;
+  ss_curve_point *points; /**< malloc'd, in order along the curve */
+  int start;              /**< the index of the grazing it started from */
+  char end[2][192];       /**< why it ended, p2 going down and up */
+} ss_curve;
+
+/**
+ * Follow the grazing @a g of the family @a b (continued in p1 over
+ * [lo1, hi1] from parameters @a p) as a second parameter, o2->param, moves
+ * over [o2->lo, o2->hi]: pseudo-arclength on the duration equations and the
+ * grazing margin = 0, in (durations, p1, p2).  At every point the orbit
+ * solved 1e-7 (relative) either side in p1 is feasible on one side only,
+ * or the curve ends.  Only a grazing of the switching condition at a phase
+ * end (margin "switching") can be followed today.
+ * @return SS_OK; SS_EINVAL (bad options, another kind of special point or
+ *         margin, p2 == p1, a range without p2's value); SS_ENOCONV (no
+ *         curve through the point); SS_ELIMIT_TIME, SS_ECANCELED (with what
+ *         was found); SS_ENOMEM.  Release @a cv with ss_curve_free().
+ */
+SS_API int ss_continue_grazing(const ss_params *p, const ss_branch *b,
+                               const ss_special *g, ss_param_id p1, double lo1,
+                               double hi1, const ss_cont_opts *o2, ss_curve *cv,
+                               ss_diag *d);
+
+/** Release what ss_continue_grazing() allocated.  NULL-safe. */
+SS_API void ss_curve_free(ss_curve *c);
+
 #ifdef __cplusplus
 }
 #endif

@@ -28,7 +28,16 @@
 #include "internal.h"
 #include "linalg.h"
 
-#define NMAX (SS_MAX_PHASES + 1)
+#define NMAX (SS_MAX_PHASES + 2)
+
+/* A curve F(y) = 0 with F from R^(ne + 1) to R^ne: f fills F and, when J
+ * is not NULL, dF/dy (ne x (ne + 1), row-major). */
+typedef int curve_fn(const void *ctx, const double *y, double *F, double *J);
+typedef struct curve {
+  curve_fn *f;
+  const void *ctx;
+  int ne;
+} curve;
 
 static const char *const PARAM_NAMES[] = {"chi", "eta", "us", "ur", "V"};
 
@@ -86,6 +95,7 @@ typedef struct cont {
   int (*cancelled)(void *);
   void *cancel_cls;
   int stop; /* SS_ELIMIT_TIME or SS_ECANCELED once asked to stop */
+  curve cv; /* the duration equations in (tau, q) */
 } cont;
 
 static double value_of(const cont *c, const double *y) {
@@ -129,12 +139,17 @@ static int eval(const cont *c, const double *y, double *F, double *J,
   return SS_OK;
 }
 
-/* The unit tangent at y, oriented along @a prev: [J; prev^T] t = e_n. */
-static int tangent(const cont *c, const double *y, const double *prev,
+static int cont_f(const void *ctx, const double *y, double *F, double *J) {
+  double z0[4];
+  return eval(ctx, y, F, J, z0);
+}
+
+/* The unit tangent at y, oriented along @a prev: [J; prev^T] t = e_ne. */
+static int tangent(const curve *cv, const double *y, const double *prev,
                    double *t) {
-  int n = c->n, np = n + 1, piv[NMAX];
-  double A[NMAX * NMAX], F[SS_MAX_PHASES], z0[4];
-  int rc = eval(c, y, F, A, z0);
+  int n = cv->ne, np = n + 1, piv[NMAX];
+  double A[NMAX * NMAX], F[NMAX];
+  int rc = cv->f(cv->ctx, y, F, A);
   if (rc != SS_OK)
     return rc;
   for (int k = 0; k < np; k++) {
@@ -158,12 +173,12 @@ static int tangent(const cont *c, const double *y, const double *prev,
 
 /* Newton from @a y (updated in place) on F = 0 and a.(y - base) = 0.
  * Returns SS_OK with the iterations in *iters, or a failure. */
-static int correct(const cont *c, double *y, const double *a,
+static int correct(const curve *cv, double *y, const double *a,
                    const double *base, int *iters, double *res) {
-  int n = c->n, np = n + 1, piv[NMAX];
-  double A[NMAX * NMAX], F[NMAX], z0[4];
+  int n = cv->ne, np = n + 1, piv[NMAX];
+  double A[NMAX * NMAX], F[NMAX];
   for (int it = 1; it <= 12; it++) {
-    int rc = eval(c, y, F, A, z0);
+    int rc = cv->f(cv->ctx, y, F, A);
     if (rc != SS_OK)
       return rc;
     double g = 0;
@@ -187,7 +202,7 @@ static int correct(const cont *c, double *y, const double *a,
       return SS_ENOCONV;
     if (dy <= 1e-13 * ymax) {
       /* the residual at the final iterate */
-      if ((rc = eval(c, y, F, NULL, z0)) != SS_OK)
+      if ((rc = cv->f(cv->ctx, y, F, NULL)) != SS_OK)
         return rc;
       double r = 0;
       for (int k = 0; k < n; k++)
@@ -306,7 +321,7 @@ static int on_chord(const cont *c, const double *ya, const double *yb,
     base[k] = ya[k] + th * a[k];
     y[k] = base[k];
   }
-  return correct(c, y, a, base, &it, res);
+  return correct(&c->cv, y, a, base, &it, res);
 }
 
 /* Test functions of the multiplier crossings at a point: det(I - J),
@@ -332,7 +347,7 @@ static int test_value(const cont *c, const double *y, const double *dir,
                       int which, double res, double *v, ss_cont_point *pt) {
   if (which == 3) {
     double t[NMAX];
-    int rc = tangent(c, y, dir, t);
+    int rc = tangent(&c->cv, y, dir, t);
     if (rc != SS_OK)
       return rc;
     *v = t[c->n];
@@ -500,7 +515,7 @@ static int follow(cont *c, const double *y0, int dir, double step0,
   double y[NMAX], t[NMAX], e[NMAX] = {0};
   memcpy(y, y0, sizeof y[0] * (size_t)np);
   e[n] = dir;
-  int rc = tangent(c, y, e, t);
+  int rc = tangent(&c->cv, y, e, t);
   if (rc != SS_OK) {
     snprintf(end, end_n, "no tangent at the start (%s)", ss_strerror(rc));
     return SS_OK;
@@ -521,9 +536,9 @@ static int follow(cont *c, const double *y0, int dir, double step0,
     int iters;
     for (int k = 0; k < np; k++)
       yn[k] = y[k] + ds * t[k];
-    rc = correct(c, yn, t, yn, &iters, &res);
+    rc = correct(&c->cv, yn, t, yn, &iters, &res);
     if (rc == SS_OK)
-      rc = tangent(c, yn, t, tn);
+      rc = tangent(&c->cv, yn, t, tn);
     double dot = 0;
     for (int k = 0; rc == SS_OK && k < np; k++)
       dot += t[k] * tn[k];
@@ -549,8 +564,8 @@ static int follow(cont *c, const double *y0, int dir, double step0,
       base[n] = (bound - c->lo) / c->S;
       memcpy(yn, y, sizeof yn);
       yn[n] = base[n];
-      if (correct(c, yn, a, base, &iters, &res) != SS_OK ||
-          tangent(c, yn, t, tn) != SS_OK) {
+      if (correct(&c->cv, yn, a, base, &iters, &res) != SS_OK ||
+          tangent(&c->cv, yn, t, tn) != SS_OK) {
         if ((ds *= 0.5) < ds_min) {
           snprintf(end, end_n, "no orbit on the bound %s = %.15g",
                    ss_param_name(c->id), bound);
@@ -641,6 +656,7 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
   c.budget = opts->max_seconds;
   c.cancelled = opts->cancelled;
   c.cancel_cls = opts->cancel_cls;
+  c.cv = (curve){cont_f, &c, c.n};
   /* the start, solved again at p */
   ss_model m;
   ss_orbit o;
@@ -695,6 +711,335 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
   if (rc != SS_OK)
     return ss__fail(d, rc, "max_seconds", c.budget, "%s",
                     rc == SS_ECANCELED ? "the continuation was cancelled"
+                                       : "the time budget ran out");
+  return SS_OK;
+}
+
+/* ---- a grazing followed in two parameters ------------------------------ */
+
+typedef struct gcont {
+  ss_params p;
+  ss_param_id id1, id2;
+  int n, k; /* phases; the grazing is at the end of phase k */
+  ss_mode modes[SS_MAX_PHASES];
+  double lo1, S1, lo2, S2, T;
+} gcont;
+
+static void gc_params(const gcont *g, const double *y, ss_params *p) {
+  *p = g->p;
+  *param_ref(p, g->id1) = g->lo1 + g->S1 * y[g->n];
+  *param_ref(p, g->id2) = g->lo2 + g->S2 * y[g->n + 1];
+}
+
+/* The switching margin at the end of phase k from the start z0, by the
+ * closed form of each phase: >= 0 when the switching rule holds there. */
+static double switch_margin(const ss_model *m, const gcont *g,
+                            const double *tau, const double z0[4]) {
+  double x[4];
+  ss_z_to_x(m, z0, x);
+  for (int j = 0; j <= g->k; j++)
+    ss_flow(m, g->modes[j], tau[j], x, x);
+  double f = ss_stick_force(m, x), ur = m->p.ur;
+  ss_mode mode = g->modes[g->k],
+          want = g->k + 1 < g->n ? g->modes[g->k + 1] : SS_MODE_SLIP;
+  if (mode == SS_MODE_SLIP)
+    return want == SS_MODE_OVERSHOOT ? -ur - f : f + ur; /* (3.2) */
+  return want == SS_MODE_STICK ? ur - f : f - ur;        /* (3.4) */
+}
+
+/* The duration equations and the margin (n + 1 values) at y. */
+static int gc_values(const gcont *g, const double *y, double *F) {
+  double tau[SS_MAX_PHASES], z0[4];
+  ss_params p;
+  ss_model m;
+  for (int k = 0; k < g->n; k++)
+    if (!((tau[k] = g->T * y[k]) > 0))
+      return SS_EDOMAIN;
+  gc_params(g, y, &p);
+  if (ss_model_init(&m, &p, NULL) != SS_OK)
+    return SS_EDOMAIN;
+  int rc = ss_orbit_equations(&m, g->n, g->modes, tau, z0, F, NULL);
+  if (rc != SS_OK)
+    return rc;
+  F[g->n] = switch_margin(&m, g, tau, z0);
+  return SS_OK;
+}
+
+/* The curve's function, its Jacobian by central differences (the values
+ * are exact; the Jacobian only steers Newton). */
+static int gc_f(const void *ctx, const double *y, double *F, double *J) {
+  const gcont *g = ctx;
+  int ne = g->n + 1, nu = ne + 1;
+  int rc = gc_values(g, y, F);
+  if (rc != SS_OK || !J)
+    return rc;
+  for (int j = 0; j < nu; j++) {
+    double yp[NMAX], ym[NMAX], Fp[NMAX], Fm[NMAX], h = 1e-7;
+    memcpy(yp, y, sizeof yp[0] * (size_t)nu);
+    memcpy(ym, y, sizeof ym[0] * (size_t)nu);
+    yp[j] += h;
+    ym[j] -= h;
+    if ((rc = gc_values(g, yp, Fp)) != SS_OK ||
+        (rc = gc_values(g, ym, Fm)) != SS_OK)
+      return rc;
+    for (int i = 0; i < ne; i++)
+      J[nu * i + j] = (Fp[i] - Fm[i]) / (2 * h);
+  }
+  return SS_OK;
+}
+
+/* The side of p1 on which the orbit at y exists: the orbit solved at
+ * p1 (1 +- 1e-7) from y's durations is feasible on one side only (+1 or
+ * -1); 0 when both or neither are. */
+static int feasible_side(const gcont *g, const double *y) {
+  ss_params p;
+  gc_params(g, y, &p);
+  double v1 = *param_ref(&p, g->id1), tau[SS_MAX_PHASES];
+  int ok[2];
+  for (int k = 0; k < g->n; k++)
+    tau[k] = g->T * y[k];
+  for (int s = 0; s < 2; s++) {
+    ss_params q = p;
+    ss_model m;
+    ss_orbit o;
+    *param_ref(&q, g->id1) = v1 * (1 + (s ? 1e-7 : -1e-7));
+    ok[s] = ss_model_init(&m, &q, NULL) == SS_OK &&
+            ss_orbit_solve(&m, g->n, g->modes, tau, NULL, &o, NULL) == SS_OK;
+  }
+  return ok[1] && !ok[0] ? 1 : ok[0] && !ok[1] ? -1 : 0;
+}
+
+static void gc_point(const gcont *g, const double *y, int side,
+                     ss_curve_point *pt) {
+  ss_params p;
+  ss_model m;
+  double F[SS_MAX_PHASES];
+  memset(pt, 0, sizeof *pt);
+  gc_params(g, y, &p);
+  pt->v1 = *param_ref(&p, g->id1);
+  pt->v2 = *param_ref(&p, g->id2);
+  for (int k = 0; k < g->n; k++)
+    pt->durations[k] = g->T * y[k];
+  if (ss_model_init(&m, &p, NULL) == SS_OK)
+    ss_orbit_equations(&m, g->n, g->modes, pt->durations, pt->z0, F, NULL);
+  pt->feasible_side = side;
+}
+
+static int gc_push(ss_curve_point **v, int *n, int *cap,
+                   const ss_curve_point *p) {
+  if (*n == *cap) {
+    int nc = *cap ? 2 * *cap : 64;
+    ss_curve_point *w = realloc(*v, (size_t)nc * sizeof *w);
+    if (!w)
+      return SS_ENOMEM;
+    *v = w;
+    *cap = nc;
+  }
+  (*v)[(*n)++] = *p;
+  return SS_OK;
+}
+
+/* Follow the curve from y0 with p2 going @a dir at the start. */
+static int gc_follow(const gcont *g, cont *stop, const double *y0, int dir,
+                     double step, int max_points, ss_curve_point **v, int *nv,
+                     int *cap, char *end, size_t end_n) {
+  int nu = g->n + 2, iq1 = g->n, iq2 = g->n + 1, iters;
+  curve cv = {gc_f, g, g->n + 1};
+  double y[NMAX], t[NMAX], e[NMAX] = {0}, res;
+  memcpy(y, y0, sizeof y[0] * (size_t)nu);
+  e[iq2] = dir;
+  if (tangent(&cv, y, e, t) != SS_OK) {
+    snprintf(end, end_n, "no tangent to the curve at its start");
+    return SS_OK;
+  }
+  double ds = step, ds_min = 1e-9, ds_max = 0.1;
+  while (*nv < max_points) {
+    if (should_stop(stop)) {
+      snprintf(end, end_n, "%s", ss_strerror(stop->stop));
+      return stop->stop;
+    }
+    double yn[NMAX], tn[NMAX];
+    for (int k = 0; k < nu; k++)
+      yn[k] = y[k] + ds * t[k];
+    int rc = correct(&cv, yn, t, yn, &iters, &res);
+    if (rc == SS_OK)
+      rc = tangent(&cv, yn, t, tn);
+    double dot = 0;
+    for (int k = 0; rc == SS_OK && k < nu; k++)
+      dot += t[k] * tn[k];
+    if (rc != SS_OK || dot < 0.95) {
+      if ((ds *= 0.5) < ds_min) {
+        snprintf(end, end_n, "the corrector failed at the smallest step");
+        return SS_OK;
+      }
+      continue;
+    }
+    /* the ranges: the last point on the bound of the second parameter; the
+     * first parameter leaving its range ends the curve where it left */
+    int at_bound = 0;
+    if (yn[iq2] > 1 || yn[iq2] < 0) {
+      double a[NMAX] = {0}, base[NMAX];
+      memcpy(base, yn, sizeof base);
+      a[iq2] = 1;
+      base[iq2] = yn[iq2] > 1 ? 1 : 0;
+      memcpy(yn, y, sizeof yn);
+      yn[iq2] = base[iq2];
+      if (correct(&cv, yn, a, base, &iters, &res) != SS_OK ||
+          tangent(&cv, yn, t, tn) != SS_OK) {
+        if ((ds *= 0.5) < ds_min) {
+          snprintf(end, end_n, "no grazing orbit on the range's bound");
+          return SS_OK;
+        }
+        continue;
+      }
+      yn[iq2] = base[iq2];
+      at_bound = 1;
+    }
+    if (yn[iq1] > 1 || yn[iq1] < 0) {
+      snprintf(end, end_n, "%s left its range [%.15g, %.15g] (at %.15g)",
+               ss_param_name(g->id1), g->lo1, g->lo1 + g->S1,
+               g->lo1 + g->S1 * yn[iq1]);
+      return SS_OK;
+    }
+    int side = feasible_side(g, yn);
+    if (side == 0) {
+      if ((ds *= 0.5) < ds_min) {
+        snprintf(end, end_n,
+                 "the grazing stops being the family's boundary (another "
+                 "constraint binds) near %s = %.15g",
+                 ss_param_name(g->id2), g->lo2 + g->S2 * yn[iq2]);
+        return SS_OK;
+      }
+      continue;
+    }
+    ss_curve_point pt;
+    gc_point(g, yn, side, &pt);
+    if ((rc = gc_push(v, nv, cap, &pt)) != SS_OK)
+      return rc;
+    memcpy(y, yn, sizeof y);
+    memcpy(t, tn, sizeof t);
+    if (at_bound) {
+      snprintf(end, end_n, "the end of the range, %s = %.15g",
+               ss_param_name(g->id2), pt.v2);
+      return SS_OK;
+    }
+    if (iters <= 3)
+      ds = fmin(ds * 1.5, ds_max);
+    else if (iters >= 6)
+      ds *= 0.6;
+  }
+  snprintf(end, end_n, "max_points (%d) reached", max_points);
+  return SS_OK;
+}
+
+void ss_curve_free(ss_curve *c) {
+  if (!c)
+    return;
+  free(c->points);
+  memset(c, 0, sizeof *c);
+}
+
+int ss_continue_grazing(const ss_params *p, const ss_branch *b,
+                        const ss_special *g, ss_param_id p1, double lo1,
+                        double hi1, const ss_cont_opts *o2, ss_curve *cv,
+                        ss_diag *d) {
+  if (!cv)
+    return ss__fail(d, SS_EINVAL, "curve", 0, "no output");
+  memset(cv, 0, sizeof *cv);
+  if (!p || !b || !g || !o2)
+    return ss__fail(d, SS_EINVAL, "opts", 0, "a NULL argument");
+  if (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "switching") ||
+      g->at.min_margin.phase < 0 ||
+      b->modes[g->at.min_margin.phase] == SS_MODE_STICK)
+    return ss__fail(d, SS_EINVAL, "special", 0,
+                    "only a grazing of the switching condition at the end of "
+                    "a slip or overshoot can be followed");
+  if (!ss_param_name(p1) || !ss_param_name(o2->param) || o2->param == p1)
+    return ss__fail(d, SS_EINVAL, "parameter", (double)o2->param,
+                    "the second parameter must be another one");
+  if (!(lo1 < hi1) || !(o2->lo < o2->hi) || !isfinite(o2->lo) ||
+      !isfinite(o2->hi))
+    return ss__fail(d, SS_EINVAL, "range", o2->lo,
+                    "a range must be [lo, hi] with lo < hi");
+  gcont gc;
+  memset(&gc, 0, sizeof gc);
+  gc.p = *p;
+  *param_ref(&gc.p, p1) = g->value;
+  gc.id1 = p1;
+  gc.id2 = o2->param;
+  gc.n = b->n_phases;
+  gc.k = g->at.min_margin.phase;
+  memcpy(gc.modes, b->modes, sizeof gc.modes);
+  gc.lo1 = lo1;
+  gc.S1 = hi1 - lo1;
+  gc.lo2 = o2->lo;
+  gc.S2 = o2->hi - o2->lo;
+  gc.T = g->at.period;
+  double v2 = *param_ref(&gc.p, gc.id2);
+  if (!(v2 >= o2->lo && v2 <= o2->hi))
+    return ss__fail(d, SS_EINVAL, "range", v2,
+                    "the range of %s must contain its value %.15g",
+                    ss_param_name(gc.id2), v2);
+  double y0[NMAX];
+  for (int k = 0; k < gc.n; k++)
+    y0[k] = g->at.durations[k] / gc.T;
+  y0[gc.n] = (g->value - lo1) / gc.S1;
+  y0[gc.n + 1] = (v2 - gc.lo2) / gc.S2;
+  /* onto the curve exactly (the located grazing is within 1e-10) */
+  curve c = {gc_f, &gc, gc.n + 1};
+  double a[NMAX] = {0}, base[NMAX];
+  int iters;
+  double res;
+  memcpy(base, y0, sizeof base);
+  a[gc.n + 1] = 1;
+  int rc = correct(&c, y0, a, base, &iters, &res);
+  if (rc != SS_OK)
+    return ss__fail(d, SS_ENOCONV, "special", g->value,
+                    "no grazing curve through the located point");
+  int side = feasible_side(&gc, y0);
+  cont stop;
+  memset(&stop, 0, sizeof stop);
+  stop.t0 = ss__now();
+  stop.budget = o2->max_seconds;
+  stop.cancelled = o2->cancelled;
+  stop.cancel_cls = o2->cancel_cls;
+  int max_points = o2->max_points ? o2->max_points : 200;
+  double step = o2->step > 0 ? o2->step : 0.02;
+  ss_curve_point *down = NULL, *up = NULL, first;
+  int nd = 0, cd = 0, nu = 0, cu = 0;
+  gc_point(&gc, y0, side, &first);
+  int bd = (max_points - 1) / 2, bu = max_points - 1 - bd;
+  int rc_d = bd > 0 ? gc_follow(&gc, &stop, y0, -1, step, bd, &down, &nd, &cd,
+                                cv->end[0], sizeof cv->end[0])
+                    : SS_OK;
+  int rc_u = bu > 0 && rc_d != SS_ENOMEM
+                 ? gc_follow(&gc, &stop, y0, +1, step, bu, &up, &nu, &cu,
+                             cv->end[1], sizeof cv->end[1])
+                 : SS_OK;
+  cv->points = malloc((size_t)(nd + nu + 1) * sizeof *cv->points);
+  if (!cv->points) {
+    free(down);
+    free(up);
+    return ss__fail(d, SS_ENOMEM, "points", 0, "out of memory");
+  }
+  for (int k = 0; k < nd; k++)
+    cv->points[k] = down[nd - 1 - k];
+  cv->points[nd] = first;
+  for (int k = 0; k < nu; k++)
+    cv->points[nd + 1 + k] = up[k];
+  cv->n_points = nd + nu + 1;
+  cv->start = nd;
+  cv->kind = SS_SPECIAL_GRAZING;
+  snprintf(cv->margin, sizeof cv->margin, "%s", g->margin);
+  cv->phase = gc.k;
+  cv->p1 = p1;
+  cv->p2 = gc.id2;
+  free(down);
+  free(up);
+  rc = rc_d != SS_OK ? rc_d : rc_u;
+  if (rc != SS_OK)
+    return ss__fail(d, rc, "max_seconds", stop.budget, "%s",
+                    rc == SS_ECANCELED ? "cancelled"
                                        : "the time budget ran out");
   return SS_OK;
 }

@@ -286,11 +286,127 @@ static void test_budget(void) {
   ss_branch_free(&b);
 }
 
+/* EVIDENCE: README "Families": the grazing that bounds the paper's family
+ * followed in chi draws the boundary ur*(chi) of the overshoot orbit's
+ * existence; at every point the orbit solved 1e-7 either side in ur exists
+ * on one side only, and the rk8pd reference gives the switching margin at
+ * zero */
+static void test_grazing_curve(void) {
+  ss_orbit start;
+  ASSERT_EQ_INT(overshoot_at(&PAPER, &start), 1);
+  ss_cont_opts co, o2;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_UR;
+  co.lo = 0.3;
+  co.hi = 1.5;
+  co.direction = -1;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&PAPER, &start, &co, &b, NULL), SS_OK);
+  ASSERT_EQ_INT(b.n_special, 1);
+  memset(&o2, 0, sizeof o2);
+  o2.param = SS_PARAM_CHI;
+  o2.lo = 0.05;
+  o2.hi = 0.6;
+  o2.max_points = 400;
+  ss_curve cv;
+  ss_diag d;
+  ss_diag_clear(&d);
+  ASSERT_EQ_INT(ss_continue_grazing(&PAPER, &b, &b.special[0], SS_PARAM_UR, 0.3,
+                                    1.5, &o2, &cv, &d),
+                SS_OK);
+  ASSERT_TRUE(cv.n_points > 20);
+  ASSERT_TRUE(cv.points[cv.start].v2 == PAPER.chi);
+  double worst = 0, lowest = INFINITY, at = 0;
+  int sides = 0;
+  for (int i = 0; i < cv.n_points; i++) {
+    const ss_curve_point *q = &cv.points[i];
+    ss_params p = PAPER;
+    p.chi = q->v2;
+    int ok[2];
+    for (int s = 0; s < 2; s++) {
+      ss_params ps = p;
+      ss_model m;
+      ss_orbit o;
+      ps.ur = q->v1 * (1 + (s ? 1e-7 : -1e-7));
+      ASSERT_EQ_INT(ss_model_init(&m, &ps, NULL), SS_OK);
+      ok[s] = ss_orbit_solve(&m, b.n_phases, b.modes, q->durations, NULL, &o,
+                             NULL) == SS_OK;
+    }
+    sides += ok[0] != ok[1] && ok[1] == (q->feasible_side > 0);
+    if (i % 8 == 0 || i == cv.n_points - 1) {
+      ss_model m;
+      ss_cont_point pt;
+      p.ur = q->v1;
+      ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+      memcpy(pt.durations, q->durations, sizeof pt.durations);
+      memcpy(pt.z0, q->z0, sizeof pt.z0);
+      worst = fmax(worst, fabs(ref_switching_margin(&p, &pt, m.d0)));
+    }
+    if (q->v1 / PAPER.us < lowest) {
+      lowest = q->v1 / PAPER.us;
+      at = q->v2;
+    }
+  }
+  printf("grazing curve in (chi, ur): %d points, chi from %.6g to %.6g; the "
+         "orbit on one side only at %d; rk8pd margin at most %.2g; smallest "
+         "ur/us %.6g at chi = %.6g\n",
+         cv.n_points, cv.points[0].v2, cv.points[cv.n_points - 1].v2, sides,
+         worst, lowest, at);
+  ASSERT_EQ_INT(sides, cv.n_points);
+  ASSERT_TRUE(worst < 1e-9);
+  /* two methods, one boundary: where the curve crosses ur = 12 us, the
+   * family in chi at ur = 12 us has its grazings */
+  ss_params p12 = PAPER;
+  p12.ur = 12 * PAPER.us;
+  ss_orbit s12;
+  ss_branch b12;
+  ss_cont_opts c12;
+  memset(&c12, 0, sizeof c12);
+  c12.param = SS_PARAM_CHI;
+  c12.lo = 0.01;
+  c12.hi = 0.99;
+  ASSERT_EQ_INT(overshoot_at(&p12, &s12), 1);
+  ASSERT_EQ_INT(ss_continue(&p12, &s12, &c12, &b12, NULL), SS_OK);
+  int crossings = 0;
+  for (int i = 0; i + 1 < cv.n_points; i++) {
+    const ss_curve_point *q0 = &cv.points[i], *q1 = &cv.points[i + 1];
+    if ((q0->v1 < p12.ur) == (q1->v1 < p12.ur))
+      continue;
+    double chi = q0->v2 +
+                 (p12.ur - q0->v1) / (q1->v1 - q0->v1) * (q1->v2 - q0->v2),
+           best = INFINITY;
+    for (int k = 0; k < b12.n_special; k++)
+      if (b12.special[k].kind == SS_SPECIAL_GRAZING)
+        best = fmin(best, fabs(b12.special[k].value - chi));
+    printf("grazing curve crosses ur = 12 us at chi = %.6g (interpolated "
+           "between points %.4g apart); the chi family's grazing is %.2g "
+           "away\n",
+           chi, fabs(q1->v2 - q0->v2), best);
+    ASSERT_TRUE(best < 0.2 * fabs(q1->v2 - q0->v2) + 1e-6);
+    crossings++;
+  }
+  ASSERT_EQ_INT(crossings, 2);
+  ss_branch_free(&b12);
+  ss_curve_free(&cv);
+  /* only a switching grazing can be followed */
+  ss_special other = b.special[0];
+  other.kind = SS_SPECIAL_PERIOD_DOUBLING;
+  ASSERT_EQ_INT(ss_continue_grazing(&PAPER, &b, &other, SS_PARAM_UR, 0.3, 1.5,
+                                    &o2, &cv, NULL),
+                SS_EINVAL);
+  o2.param = SS_PARAM_UR; /* the same parameter twice */
+  ASSERT_EQ_INT(ss_continue_grazing(&PAPER, &b, &b.special[0], SS_PARAM_UR, 0.3,
+                                    1.5, &o2, &cv, NULL),
+                SS_EINVAL);
+  ss_branch_free(&b);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_ur_family();
   test_period_doubling();
   test_bad_options();
   test_budget();
+  test_grazing_curve();
   TEST_DONE();
 }

@@ -83,6 +83,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   struct sockaddr_un peer;
   memset(&peer, 0, sizeof peer);
   peer.sun_family = AF_UNIX;
+  unsigned long started = srv_connections_started(d);
   if (srv_add_connection(d, sv[1], (struct sockaddr *)&peer, sizeof peer)) {
     close(sv[0]);
     return 0; /* the daemon refused it (and closed its end) */
@@ -101,7 +102,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     struct pollfd p = {sv[0], (short)(POLLIN | (wr_open ? POLLOUT : 0)), 0};
     int ms = (int)((deadline - now()) * 1e3);
     if (ms <= 0 || poll(&p, 1, ms) <= 0) {
-      fprintf(stderr, "fuzz_http: no end of the answer within 10 s\n");
+      /* which side lost it: libmicrohttpd never took the connection up
+       * from its queue of added connections, or the daemon has it */
+      fprintf(stderr,
+              "fuzz_http: no end of the answer within 10 s (libmicrohttpd "
+              "%s the connection)\n",
+              srv_connections_started(d) > started ? "took up"
+                                                   : "never took up");
       abort();
     }
     if (wr_open && (p.revents & POLLOUT)) {
