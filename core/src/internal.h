@@ -38,6 +38,12 @@ static inline void ss__two_sum(double a, double b, double *s, double *e) {
 
 double ss__now(void); /* monotonic seconds */
 
+/* Whether the sequence (n phases, durations tau) is a shorter one repeated
+ * two or more times, durations equal within @a tol: the same orbit
+ * travelled again, not an orbit of longer period. */
+int ss__is_repetition(int n, const ss_mode *modes, const double *tau,
+                      double tol);
+
 /* Whether g(t0) is zero within the event finder's tolerance (returns 1) and
  * the direction g leaves t0 in (*dir = -1 down, +1 up); when g(t0) is not
  * zero, returns 0 and *dir is its sign. */

@@ -560,3 +560,17 @@ int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
                     "a phase of the orbit ends tangentially (grazing)");
   return rc;
 }
+
+int ss__is_repetition(int n, const ss_mode *modes, const double *tau,
+                      double tol) {
+  for (int m = 1; m <= n / 2; m++) {
+    if (n % m)
+      continue;
+    int same = 1;
+    for (int k = m; k < n && same; k++)
+      same = modes[k] == modes[k % m] && fabs(tau[k] - tau[k % m]) < tol;
+    if (same)
+      return 1;
+  }
+  return 0;
+}

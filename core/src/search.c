@@ -76,6 +76,12 @@ static int same_orbit(const ss_model *m, const ss_orbit *a, const ss_orbit *b,
 }
 
 static void add_orbit(collect *c, const ss_orbit *o) {
+  /* a shorter orbit travelled twice is that orbit, found again */
+  if (ss__is_repetition(o->n_phases, o->modes, o->durations,
+                        1e-6 * (1 + o->period))) {
+    c->rep->duplicates++;
+    return;
+  }
   for (int i = 0; i < c->n; i++)
     if (same_orbit(c->m, o, &c->out[i], 1e-6 * c->scale)) {
       c->rep->duplicates++;
