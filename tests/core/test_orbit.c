@@ -388,6 +388,35 @@ static void test_public_api(void) {
       SS_EINVAL);
 }
 
+/* EVIDENCE: README "The paper's orbit, and where this differs from the
+ * printed values" is silent on this; the search lists each orbit once: a
+ * period-1 orbit travelled twice is not a period-2 orbit.  At chi = 0.312,
+ * ur = 12 us, the period-2 orbit born at the period doubling (period
+ * 19.2021) is listed, the overshoot and stick-slip orbits twice over are
+ * not. */
+static void test_no_repetitions(void) {
+  ss_params p = {0.312, 4, 0.0724, 12 * 0.0724, 1};
+  ss_model m;
+  ss_orbit_opts oo;
+  ss_orbit out[MAXO];
+  int n = 0, period2 = 0;
+  memset(&oo, 0, sizeof oo);
+  oo.max_period = 2;
+  oo.effort = 3;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, out, MAXO, &n, NULL, NULL), SS_OK);
+  for (int i = 0; i < n; i++) {
+    const ss_orbit *o = &out[i];
+    int h = o->n_phases / 2, twice = o->n_phases % 2 == 0;
+    for (int k = 0; twice && k < h; k++)
+      twice = o->modes[k] == o->modes[k + h] &&
+              fabs(o->durations[k] - o->durations[k + h]) < 1e-6 * o->period;
+    ASSERT_TRUE(!twice);
+    period2 += o->n_turns == 2;
+  }
+  ASSERT_EQ_INT(period2, 1);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_public_api();
@@ -397,5 +426,6 @@ int main(void) {
   test_sweep();
   test_equation_jacobian();
   test_bad_input();
+  test_no_repetitions();
   TEST_DONE();
 }
