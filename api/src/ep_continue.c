@@ -45,6 +45,7 @@ typedef struct cont_x {
   int direction;
   cont_follow follow;
   int has_follow;
+  int branch_switching;
   /* for the core */
   ss_orbit start;
   ss_cont_opts opts;
@@ -53,6 +54,12 @@ typedef struct cont_x {
   int rc;
   ss_curve curves[SS_MAX_SPECIAL];
   int n_curves;
+  /* with branch_switching: the period-2 family of each period doubling
+   * (index in b.special), or why there is none */
+  ss_branch period2[SS_MAX_SPECIAL];
+  int of_special[SS_MAX_SPECIAL];
+  int n_period2;
+  char why_none[SS_MAX_SPECIAL][192];
 } cont_x;
 
 static int decode_range(const json_t *v, const char *ptr, void *dest,
@@ -119,6 +126,8 @@ static const api_field FIELDS[] = {
      offsetof(cont_x, direction), 0, 0, 0, DIRECTIONS},
     {"follow", API_T_OBJECT, 0, 0, 0, NULL, offsetof(cont_x, follow),
      API_HAS(cont_x, has_follow), 0, 0, &FOLLOW_SPEC},
+    {"branch_switching", API_T_BOOL, API_DEFAULT, 0, 0, NULL,
+     offsetof(cont_x, branch_switching)},
 };
 static const api_spec SPEC = API_SPEC(FIELDS);
 
@@ -205,6 +214,24 @@ int ep_continue_run(void *xp, const api_call *c) {
         ss_curve_free(cv); /* this grazing has no curve: none is listed */
     }
   }
+  for (int i = 0; x->branch_switching && x->rc == SS_OK && i < x->b.n_special;
+       i++) {
+    const ss_special *pd = &x->b.special[i];
+    if (pd->kind != SS_SPECIAL_PERIOD_DOUBLING)
+      continue;
+    ss_diag d2;
+    ss_diag_clear(&d2);
+    ss_branch *b2 = &x->period2[x->n_period2];
+    int rc = ss_continue_period2(&x->ap.p, &x->b, pd, &x->opts, b2, &d2);
+    if (rc == SS_OK)
+      x->of_special[x->n_period2++] = i;
+    else if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED || rc == SS_ENOMEM)
+      x->rc = rc;
+    else
+      snprintf(x->why_none[i], sizeof x->why_none[i], "%s", d2.text);
+    if (rc != SS_OK)
+      ss_branch_free(b2);
+  }
   if (x->rc == SS_OK)
     return 0;
   if (x->rc == SS_ELIMIT_TIME)
@@ -258,9 +285,9 @@ static json_t *point(const ss_cont_point *p, int n) {
   return o;
 }
 
-int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
-  const cont_x *x = xp;
-  const ss_branch *b = &x->b;
+/* A family as JSON; for the first, the period-2 families its period
+ * doublings start (their index in "branches"), or why none. */
+static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
   json_t *br = json_object();
   api__set(
       br, "kind",
@@ -269,6 +296,8 @@ int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
   for (int k = 0; k < b->n_phases; k++)
     json_array_append_new(modes, json_string(ss_mode_name(b->modes[k])));
   api__set(br, "modes", modes);
+  api__set(br, "period_multiple",
+           json_integer(b->n_points ? b->points[0].n_turns : 1));
   json_t *pts = json_array();
   for (int i = 0; i < b->n_points; i++)
     json_array_append_new(pts, point(&b->points[i], b->n_phases));
@@ -291,6 +320,16 @@ int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
     api__set(o, "stable_before", json_boolean(s->stable_before));
     api__set(o, "stable_after", json_boolean(s->stable_after));
     api__set(o, "detail", json_string(s->detail));
+    if (first && x->branch_switching && s->kind == SS_SPECIAL_PERIOD_DOUBLING) {
+      int at = -1;
+      for (int k = 0; k < x->n_period2; k++)
+        if (x->of_special[k] == i)
+          at = k + 1;
+      if (at > 0)
+        api__set(o, "branch", json_integer(at));
+      else
+        api__set(o, "no_branch", json_string(x->why_none[i]));
+    }
     api__set(o, "orbit", point(&s->at, b->n_phases));
     json_array_append_new(sp, o);
   }
@@ -306,9 +345,16 @@ int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
            b->end[1][0] ? b->end[1] : "");
   api__set(br, "end", json_string(end));
   api__set(br, "ends", ends);
+  return br;
+}
+
+int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
+  const cont_x *x = xp;
   json_t *o = json_object();
   json_t *branches = json_array();
-  json_array_append_new(branches, br);
+  json_array_append_new(branches, branch_json(x, &x->b, 1));
+  for (int i = 0; i < x->n_period2; i++)
+    json_array_append_new(branches, branch_json(x, &x->period2[i], 0));
   api__set(o, "branches", branches);
   json_t *curves = json_array();
   for (int i = 0; i < x->n_curves; i++) {
@@ -352,5 +398,7 @@ void ep_continue_release(void *xp) {
   ss_branch_free(&x->b);
   for (int i = 0; i < x->n_curves; i++)
     ss_curve_free(&x->curves[i]);
+  for (int i = 0; i < x->n_period2; i++)
+    ss_branch_free(&x->period2[i]);
   free(x);
 }

@@ -874,6 +874,21 @@ SS_API int ss_continue(const ss_params *p, const ss_orbit *start,
 /** Release what ss_continue() allocated.  NULL-safe; zeroes @a b. */
 SS_API void ss_branch_free(ss_branch *b);
 
+/**
+ * Start the period-2 family at the period doubling @a pd of the family @a b
+ * (continued with @a o from parameters @a p) and continue it with @a o:
+ * the period-2 orbit (the family's sequence twice, halves that differ) is
+ * looked for by ss_orbit_find() a little way either side of the located
+ * value, nearest first.  The new family ends where it meets the period-1
+ * family again (its halves become equal) or as any family does.
+ * @return SS_OK (@a out is the period-2 family); SS_EINVAL (@a pd is not a
+ *         period doubling); SS_ENOCONV (no period-2 orbit found near it);
+ *         or as ss_continue().  Release @a out with ss_branch_free().
+ */
+SS_API int ss_continue_period2(const ss_params *p, const ss_branch *b,
+                               const ss_special *pd, const ss_cont_opts *o,
+                               ss_branch *out, ss_diag *d);
+
 /** A point of a curve of special points in two parameters. */
 typedef struct ss_curve_point {
   double v1, v2;                   /**< the first and second parameter */

@@ -506,6 +506,18 @@ static int push(ss_cont_point **v, int *n, int *cap, const ss_cont_point *p) {
   return SS_OK;
 }
 
+/* For a sequence that is a shorter one twice: the difference of the two
+ * halves' first durations (0 for an orbit travelled twice); NAN for any
+ * other sequence. */
+static double asymmetry(int n, const ss_mode *modes, const double *tau) {
+  if (n % 2)
+    return NAN;
+  for (int k = 0; k < n / 2; k++)
+    if (modes[k] != modes[k + n / 2])
+      return NAN;
+  return tau[0] - tau[n / 2];
+}
+
 /* Follow the family from y0 in direction @a dir (+1 up in the parameter at
  * the start, -1 down); the points go to *v, the specials to b. */
 static int follow(cont *c, const double *y0, int dir, double step0,
@@ -588,6 +600,17 @@ static int follow(cont *c, const double *y0, int dir, double step0,
         return rc;
       snprintf(end, end_n, "grazing at %s = %.15g: %.120s",
                ss_param_name(c->id), last.value, why.text);
+      return SS_OK;
+    }
+    /* a period-2 family that meets the orbit it was born from: its halves
+     * become equal (and then swap, the same orbit shifted by a period) */
+    double a0 = asymmetry(n, c->modes, prev.durations),
+           a1 = asymmetry(n, c->modes, pt.durations);
+    if ((a0 < 0 && a1 >= 0) || (a0 > 0 && a1 <= 0)) {
+      snprintf(end, end_n,
+               "returns to the orbit of half its period, at its period "
+               "doubling, after %s = %.15g (its halves swap)",
+               ss_param_name(c->id), prev.value);
       return SS_OK;
     }
     /* sign changes between prev and pt */
@@ -1042,4 +1065,61 @@ int ss_continue_grazing(const ss_params *p, const ss_branch *b,
                     rc == SS_ECANCELED ? "cancelled"
                                        : "the time budget ran out");
   return SS_OK;
+}
+
+/* ---- the period-2 family at a period doubling ------------------------- */
+
+int ss_continue_period2(const ss_params *p, const ss_branch *b,
+                        const ss_special *pd, const ss_cont_opts *o,
+                        ss_branch *out, ss_diag *d) {
+  if (!out)
+    return ss__fail(d, SS_EINVAL, "branch", 0, "no output");
+  memset(out, 0, sizeof *out);
+  if (!p || !b || !pd || !o || !ss_param_name(o->param))
+    return ss__fail(d, SS_EINVAL, "opts", 0, "a NULL argument");
+  if (pd->kind != SS_SPECIAL_PERIOD_DOUBLING || 2 * b->n_phases > SS_MAX_PHASES)
+    return ss__fail(d, SS_EINVAL, "special", 0,
+                    "not a period doubling of a family short enough to "
+                    "double");
+  static const double STEPS[] = {5e-4, 1e-3, 2e-3, 4e-3, 8e-3};
+  int n2 = 2 * b->n_phases;
+  for (size_t i = 0; i < sizeof STEPS / sizeof STEPS[0]; i++)
+    for (int side = -1; side <= 1; side += 2) {
+      ss_params q = *p;
+      double v = pd->value + side * STEPS[i] * (o->hi - o->lo);
+      if (!(v >= o->lo && v <= o->hi))
+        continue;
+      *param_ref(&q, o->param) = v;
+      ss_model m;
+      ss_orbit_opts oo;
+      ss_orbit found[32];
+      int nf = 0;
+      memset(&oo, 0, sizeof oo);
+      oo.kinds = SS_ORBIT_OTHER;
+      oo.max_period = 2;
+      oo.effort = 3;
+      oo.max_seconds = o->max_seconds;
+      oo.cancelled = o->cancelled;
+      oo.cancel_cls = o->cancel_cls;
+      if (ss_model_init(&m, &q, NULL) != SS_OK ||
+          ss_orbit_find(&m, &oo, found, 32, &nf, NULL, NULL) != SS_OK)
+        continue;
+      int best = -1;
+      for (int k = 0; k < nf; k++) {
+        const ss_orbit *f = &found[k];
+        int match = f->n_turns == 2 && f->n_phases == n2;
+        for (int j = 0; match && j < n2; j++)
+          match = f->modes[j] == b->modes[j % b->n_phases];
+        if (match &&
+            (best < 0 || fabs(f->period - 2 * pd->at.period) <
+                             fabs(found[best].period - 2 * pd->at.period)))
+          best = k;
+      }
+      if (best >= 0)
+        return ss_continue(&q, &found[best], o, out, d);
+    }
+  return ss__fail(d, SS_ENOCONV, "special", pd->value,
+                  "no period-2 orbit found near the period doubling at "
+                  "%.15g",
+                  pd->value);
 }

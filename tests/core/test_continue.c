@@ -219,6 +219,47 @@ static void test_period_doubling(void) {
   }
   ASSERT_EQ_INT(pd, 2);
   ASSERT_EQ_INT(grazing, 2);
+  /* the period-2 family born at the first period doubling (stable to
+   * unstable as chi grows: on the unstable side, supercritical) */
+  const ss_special *first = NULL;
+  for (int i = 0; i < b.n_special && !first; i++)
+    if (b.special[i].kind == SS_SPECIAL_PERIOD_DOUBLING)
+      first = &b.special[i];
+  ss_branch b2;
+  ss_diag d;
+  ss_diag_clear(&d);
+  ASSERT_TRUE(first != NULL);
+  if (first) {
+    ASSERT_EQ_INT(ss_continue_period2(&p, &b, first, &co, &b2, &d), SS_OK);
+    ASSERT_EQ_INT(b2.n_phases, 2 * b.n_phases);
+    ASSERT_TRUE(b2.n_points >= 3);
+    double worst2 = 0, lowest = INFINITY, t_low = 0;
+    for (int i = 0; i < b2.n_points; i++) {
+      const ss_cont_point *q = &b2.points[i];
+      int h = b.n_phases;
+      ASSERT_EQ_INT(q->n_turns, 2);
+      ASSERT_TRUE(fabs(q->durations[0] - q->durations[h]) > 1e-6);
+      ASSERT_TRUE(q->value > first->value);
+      worst2 = fmax(worst2, check_point(&p, SS_PARAM_CHI, &b2, q));
+      if (q->value < lowest) {
+        lowest = q->value;
+        t_low = q->period;
+      }
+    }
+    printf("period-2 family from chi = %.12g: %d points up to chi = %.12g; "
+           "nearest the doubling its period is %.9g (twice the period-1 "
+           "orbit's there: %.9g); multipliers within %.2g of the "
+           "finite-difference ones; ends: %s / %s\n",
+           first->value, b2.n_points, b2.points[b2.n_points - 1].value, t_low,
+           2 * first->at.period, worst2, b2.end[0], b2.end[1]);
+    ASSERT_TRUE(worst2 < 1e-6);
+    ASSERT_TRUE(fabs(t_low - 2 * first->at.period) < 1e-3);
+    ASSERT_TRUE(strstr(b2.end[0], "half its period") != NULL);
+    ss_branch_free(&b2);
+    /* a grazing is no period doubling */
+    ASSERT_EQ_INT(ss_continue_period2(&p, &b, &b.special[0], &co, &b2, NULL),
+                  SS_EINVAL);
+  }
   ss_branch_free(&b);
 }
 
