@@ -287,6 +287,32 @@ static json_t *point(const ss_cont_point *p, int n) {
 
 /* A family as JSON; for the first, the period-2 families its period
  * doublings start (their index in "branches"), or why none. */
+/* What the motion does just past a grazing that ends the family. */
+static json_t *beyond_json(const cont_x *x, const ss_branch *b,
+                           const ss_special *g, ss_param_id id) {
+  double v;
+  ss_attractor a;
+  if (ss_beyond_grazing(&x->ap.p, b, g, id, &v, &a) != SS_OK)
+    return json_null();
+  json_t *o = json_object();
+  api__set(o, "value", api__real(v));
+  api__set(o, "found", json_boolean(a.found));
+  api__set(o, "perpetual_slip", json_boolean(a.perpetual_slip));
+  api__set(o, "turns_simulated", json_integer(a.turns_run));
+  if (a.found) {
+    json_t *modes = json_array();
+    for (int k = 0; k < a.n_phases && k < SS_MAX_PHASES; k++)
+      json_array_append_new(modes, json_string(ss_mode_name(a.modes[k])));
+    api__set(o, "n_turns", json_integer(a.n_turns));
+    api__set(o, "period", api__real(a.period));
+    api__set(o, "n_phases", json_integer(a.n_phases));
+    api__set(o, "n_overshoot", json_integer(a.n_overshoot));
+    api__set(o, "modes", modes);
+    api__set(o, "s", api__vec(a.s, 2));
+  }
+  return o;
+}
+
 static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
   json_t *br = json_object();
   api__set(
@@ -315,6 +341,7 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
       api__set(o, "phase", json_integer(s->at.min_margin.phase));
       api__set(o, "t", api__real(s->at.min_margin.t));
       api__set(o, "margin_value", api__real(s->at.min_margin.value));
+      api__set(o, "beyond", beyond_json(x, b, s, x->opts.param));
     }
     api__set(o, "multipliers", multipliers(s->at.eig_re, s->at.eig_im));
     api__set(o, "stable_before", json_boolean(s->stable_before));

@@ -889,6 +889,43 @@ SS_API int ss_continue_period2(const ss_params *p, const ss_branch *b,
                                const ss_special *pd, const ss_cont_opts *o,
                                ss_branch *out, ss_diag *d);
 
+/** Where the motion settles: a periodic attractor found by simulation. */
+typedef struct ss_attractor {
+  int found;          /**< 1: a periodic attractor; 0: none within the budget */
+  int perpetual_slip; /**< the motion slips for ever (no return) */
+  int n_turns;        /**< returns to Sigma0 per period */
+  double period;      /**< its period */
+  int n_phases;       /**< phases per period (may exceed SS_MAX_PHASES) */
+  int n_overshoot;    /**< overshoot phases per period */
+  ss_mode modes[SS_MAX_PHASES];    /**< the first min(n_phases, 16) modes */
+  double durations[SS_MAX_PHASES]; /**< and their durations */
+  double s[2];                     /**< a point of it on Sigma0, (z1, z1') */
+  int turns_run;                   /**< returns simulated to find it */
+} ss_attractor;
+
+/**
+ * Simulate from (z1, z1') = @a s0 on Sigma0, return by return, and find
+ * the periodic attractor the motion settles on: the smallest k <= max_period
+ * with |P^k(s) - s| < 1e-9 (1 + |s|) at two successive returns, after at
+ * least 20 returns, within max_turns returns.
+ * @return SS_OK (a->found says whether one was found); SS_EINVAL; a failure
+ *         of the simulation.  Thread-safe.
+ */
+SS_API int ss_attractor_from(const ss_model *m, const double s0[2],
+                             int max_turns, int max_period, ss_attractor *a);
+
+/**
+ * What the motion does just beyond the grazing @a g that ends the family
+ * @a b (continued in @a param): from the grazing orbit's start, at the
+ * parameter 1e-4 (relative) past the located value on the side where the
+ * family does not exist (*value), the attractor simulation reaches
+ * (ss_attractor_from, 5000 returns, periods up to 64 returns).
+ * @return SS_OK; SS_EINVAL (@a g is not a grazing that ends @a b).
+ */
+SS_API int ss_beyond_grazing(const ss_params *p, const ss_branch *b,
+                             const ss_special *g, ss_param_id param,
+                             double *value, ss_attractor *a);
+
 /** A point of a curve of special points in two parameters. */
 typedef struct ss_curve_point {
   double v1, v2;                   /**< the first and second parameter */

@@ -1123,3 +1123,96 @@ int ss_continue_period2(const ss_params *p, const ss_branch *b,
                   "%.15g",
                   pd->value);
 }
+
+/* ---- beyond a grazing: the attractor simulation reaches ---------------- */
+
+int ss_attractor_from(const ss_model *m, const double s0[2], int max_turns,
+                      int max_period, ss_attractor *a) {
+  if (!m || !s0 || !a || max_turns < 1 || max_period < 1 || max_period > 256)
+    return SS_EINVAL;
+  memset(a, 0, sizeof *a);
+  /* the last max_period + 1 returns: the point reached and the phases of
+   * the turn that led there */
+  typedef struct turn {
+    double s[2];
+    int n;
+    ss_mode modes[SS_MAX_PHASES];
+    double dur[SS_MAX_PHASES];
+  } turn;
+  int cap = max_period + 2;
+  turn *h = calloc((size_t)cap, sizeof *h);
+  if (!h)
+    return SS_ENOMEM;
+  double s[2] = {s0[0], s0[1]};
+  int rc = SS_OK;
+  for (int t = 0; t < max_turns; t++) {
+    turn *cur = &h[t % cap];
+    rc = ss_poincare(m, s, 1, 100000, cur->s, cur->modes, cur->dur, &cur->n);
+    if (rc == SS_HORIZON) {
+      a->perpetual_slip = 1;
+      a->turns_run = t + 1;
+      rc = SS_OK;
+      break;
+    }
+    if (rc != SS_OK)
+      break;
+    s[0] = cur->s[0];
+    s[1] = cur->s[1];
+    a->turns_run = t + 1;
+    if (t < 20)
+      continue;
+    double tol = 1e-9 * (1 + fabs(s[0]) + fabs(s[1]));
+    for (int k = 1; k <= max_period && k + 1 <= t; k++) {
+      const turn *b = &h[(t - k) % cap], *c1 = &h[(t - 1) % cap],
+                 *b1 = &h[(t - 1 - k) % cap];
+      if (fabs(cur->s[0] - b->s[0]) > tol || fabs(cur->s[1] - b->s[1]) > tol ||
+          fabs(c1->s[0] - b1->s[0]) > tol || fabs(c1->s[1] - b1->s[1]) > tol)
+        continue;
+      /* the period: the last k turns */
+      a->found = 1;
+      a->n_turns = k;
+      a->s[0] = cur->s[0];
+      a->s[1] = cur->s[1];
+      for (int j = k - 1; j >= 0; j--) {
+        const turn *u = &h[(t - j) % cap];
+        for (int q = 0; q < u->n; q++) {
+          if (a->n_phases < SS_MAX_PHASES) {
+            a->modes[a->n_phases] = u->modes[q];
+            a->durations[a->n_phases] = u->dur[q];
+          }
+          a->n_phases++;
+          a->n_overshoot += u->modes[q] == SS_MODE_OVERSHOOT;
+          a->period += u->dur[q];
+        }
+      }
+      free(h);
+      return SS_OK;
+    }
+  }
+  free(h);
+  return rc;
+}
+
+int ss_beyond_grazing(const ss_params *p, const ss_branch *b,
+                      const ss_special *g, ss_param_id param, double *value,
+                      ss_attractor *a) {
+  if (!p || !b || !g || !value || !a || g->kind != SS_SPECIAL_GRAZING ||
+      !ss_param_name(param) || b->n_points < 2)
+    return SS_EINVAL;
+  /* the family lies on one side of the grazing: its neighbour says which */
+  int at = -1;
+  for (int i = 0; i < b->n_points; i++)
+    if (b->points[i].value == g->value)
+      at = i;
+  if (at < 0 || (at != 0 && at != b->n_points - 1))
+    return SS_EINVAL;
+  double toward = b->points[at == 0 ? 1 : at - 1].value - g->value;
+  ss_params q = *p;
+  *value = g->value * (1 - (toward > 0 ? 1e-4 : -1e-4));
+  *param_ref(&q, param) = *value;
+  ss_model m;
+  if (ss_model_init(&m, &q, NULL) != SS_OK)
+    return SS_EINVAL;
+  double s0[2] = {g->at.z0[0], g->at.z0[2]};
+  return ss_attractor_from(&m, s0, 5000, 64, a);
+}

@@ -442,6 +442,64 @@ static void test_grazing_curve(void) {
   ss_branch_free(&b);
 }
 
+/* EVIDENCE: README "Families": beyond the grazing that ends a family the
+ * motion settles, by simulation, on a periodic attractor, which the rk8pd
+ * reference closes over its period through the same number of phases */
+static void check_beyond(const ss_params *p, ss_param_id id, double lo,
+                         double hi) {
+  ss_orbit start;
+  ASSERT_EQ_INT(overshoot_at(p, &start), 1);
+  ss_cont_opts co;
+  memset(&co, 0, sizeof co);
+  co.param = id;
+  co.lo = lo;
+  co.hi = hi;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(p, &start, &co, &b, NULL), SS_OK);
+  for (int i = 0; i < b.n_special; i++) {
+    const ss_special *g = &b.special[i];
+    if (g->kind != SS_SPECIAL_GRAZING)
+      continue;
+    double v;
+    ss_attractor a;
+    ASSERT_EQ_INT(ss_beyond_grazing(p, &b, g, id, &v, &a), SS_OK);
+    ASSERT_TRUE(a.found);
+    /* on the side where the family does not exist */
+    ASSERT_TRUE((v - g->value) * (b.points[b.start].value - g->value) < 0);
+    ss_params q = *p;
+    *param(&q, id) = v;
+    ss_model m;
+    ASSERT_EQ_INT(ss_model_init(&m, &q, NULL), SS_OK);
+    double x[4] = {a.s[0] + m.d0[0], a.s[0] + (q.ur - q.us) / q.chi + m.d0[1],
+                   a.s[1], q.V};
+    ref_params rp = {q.chi, q.eta, q.us, q.ur, q.V};
+    ref_opts ro = {gsl_odeiv2_step_rk8pd, 1e-13, 1e-13, 0, 1e-13};
+    ref_event ev[256];
+    double xe[4], err = 0;
+    int me;
+    long ne = ref_simulate(&rp, 0, x, REF_SLIP, a.period * (1 - 1e-9), &ro, ev,
+                           256, xe, &me);
+    for (int k = 0; k < 4; k++)
+      err = fmax(err, fabs(xe[k] - x[k]));
+    printf("beyond the grazing at %s = %.12g (at %.12g): an attractor of %d "
+           "returns, period %.9g, %d phases (%d overshoots) after %d "
+           "returns; rk8pd closes it to %.2g through %ld events\n",
+           ss_param_name(id), g->value, v, a.n_turns, a.period, a.n_phases,
+           a.n_overshoot, a.turns_run, err, ne);
+    ASSERT_TRUE(err < 1e-6);
+    /* the last event is the return itself, at the period's end */
+    ASSERT_TRUE(ne == a.n_phases || ne == a.n_phases - 1);
+  }
+  ss_branch_free(&b);
+}
+
+static void test_beyond(void) {
+  check_beyond(&PAPER, SS_PARAM_UR, 0.3, 1.5);
+  ss_params p = PAPER;
+  p.ur = 12 * p.us;
+  check_beyond(&p, SS_PARAM_CHI, 0.01, 0.99);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_ur_family();
@@ -449,5 +507,6 @@ int main(void) {
   test_bad_options();
   test_budget();
   test_grazing_curve();
+  test_beyond();
   TEST_DONE();
 }
