@@ -500,6 +500,48 @@ static void test_beyond(void) {
   check_beyond(&p, SS_PARAM_CHI, 0.01, 0.99);
 }
 
+/* EVIDENCE: README "Families": the paper's family continued in us loses
+ * its stability at a Neimark-Sacker point, where the finite-difference
+ * Jacobian of the simulated map has a complex pair on the unit circle */
+static void test_neimark_sacker(void) {
+  ss_orbit start;
+  ASSERT_EQ_INT(overshoot_at(&PAPER, &start), 1);
+  ss_cont_opts co;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_US;
+  co.lo = 0.001;
+  co.hi = 0.6;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&PAPER, &start, &co, &b, NULL), SS_OK);
+  int ns = 0;
+  for (int i = 0; i < b.n_special; i++) {
+    const ss_special *s = &b.special[i];
+    if (s->kind != SS_SPECIAL_NEIMARK_SACKER)
+      continue;
+    ss_params at = PAPER;
+    at.us = s->value;
+    ss_model m;
+    ss_orbit o;
+    ss_stab_opts so = {0, 1};
+    ASSERT_EQ_INT(ss_model_init(&m, &at, NULL), SS_OK);
+    ASSERT_EQ_INT(
+        ss_orbit_solve(&m, b.n_phases, b.modes, s->at.durations, &so, &o, NULL),
+        SS_OK);
+    double re[2], im[2];
+    eig2(o.stab.jac_fd, re, im);
+    double mod = hypot(re[0], im[0]);
+    printf("Neimark-Sacker at us = %.15g (precision %.2g): finite-difference "
+           "multipliers %.9g +- %.9gi, modulus %.12g\n",
+           s->value, s->precision, re[0], im[0], mod);
+    ASSERT_TRUE(im[0] != 0 && fabs(mod - 1) < 1e-6);
+    ASSERT_TRUE(s->precision <= 1e-10);
+    ASSERT_TRUE(s->stable_before != s->stable_after);
+    ns++;
+  }
+  ASSERT_EQ_INT(ns, 1);
+  ss_branch_free(&b);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_ur_family();
@@ -508,5 +550,6 @@ int main(void) {
   test_budget();
   test_grazing_curve();
   test_beyond();
+  test_neimark_sacker();
   TEST_DONE();
 }
