@@ -121,6 +121,9 @@ static ss_orbit START12;
 static double family_up(void) {
   return family(&PAPER, &ORB, SS_PARAM_UR, 0.3, 1.5, 1, NULL);
 }
+static double locate_grazing(void) {
+  return family(&PAPER, &ORB, SS_PARAM_UR, 0.3, 1.5, -1, NULL);
+}
 static double family_ur(void) {
   return family(&PAPER, &ORB, SS_PARAM_UR, 0.3, 1.5, 0, NULL);
 }
@@ -216,6 +219,9 @@ int main(int argc, char **argv) {
       {"simulate 1000 periods (3000 events), final state only", sim_1000, 21,
        "< 1 ms (1 us per period)"},
       {w_up, family_up, 51, "< 30 us per point", n_up},
+      {"locate the grazing that ends it below (one step, then bisection to "
+       "1e-10)",
+       locate_grazing, 51, "", 0},
       {w_ur, family_ur, 51, "", n_ur},
       {w_chi, family_chi, 51, "", n_chi},
       {w_curve, boundary_curve, 21, "", n_curve},
