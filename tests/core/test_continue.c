@@ -542,6 +542,82 @@ static void test_neimark_sacker(void) {
   ss_branch_free(&b);
 }
 
+/* EVIDENCE: README "Families": a family followed around a fold comes back:
+ * the stick-slip family at ur = 12 us turns back in chi at a saddle-node,
+ * where the finite-difference Jacobian of the simulated map has a
+ * multiplier of +1, and the orbit changes continuously through the turn */
+static void test_fold(void) {
+  ss_params p = PAPER;
+  p.ur = 12 * p.us;
+  p.chi = 0.5;
+  ss_model m;
+  ss_orbit_opts oo;
+  ss_orbit found[16], *start = NULL;
+  int n = 0;
+  memset(&oo, 0, sizeof oo);
+  oo.kinds = SS_ORBIT_STICKSLIP;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, found, 16, &n, NULL, NULL), SS_OK);
+  for (int i = 0; i < n; i++)
+    if (fabs(found[i].period - 12.569) < 0.01)
+      start = &found[i];
+  ASSERT_TRUE(start != NULL);
+  if (!start)
+    return;
+  ss_cont_opts co;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_CHI;
+  co.lo = 0.01;
+  co.hi = 0.99;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&p, start, &co, &b, NULL), SS_OK);
+  const ss_special *fold = NULL, *sn = NULL;
+  for (int i = 0; i < b.n_special; i++) {
+    if (b.special[i].kind == SS_SPECIAL_FOLD)
+      fold = &b.special[i];
+    if (b.special[i].kind == SS_SPECIAL_SADDLE_NODE)
+      sn = &b.special[i];
+  }
+  ASSERT_TRUE(fold != NULL && sn != NULL);
+  if (!fold || !sn)
+    return;
+  /* the parameter turns: it falls to the fold along the family and rises
+   * after it, and the durations move by small steps throughout */
+  int turns = 0;
+  double jump = 0, least = INFINITY;
+  for (int i = 1; i < b.n_points; i++) {
+    const ss_cont_point *a = &b.points[i - 1], *c = &b.points[i];
+    for (int k = 0; k < b.n_phases; k++)
+      jump = fmax(jump, fabs(c->durations[k] - a->durations[k]) / a->period);
+    if (i + 1 < b.n_points &&
+        (c->value - a->value) * (b.points[i + 1].value - c->value) < 0)
+      turns++;
+    least = fmin(least, c->value);
+  }
+  ss_params at = p;
+  ss_orbit o;
+  ss_stab_opts so = {0, 1};
+  at.chi = sn->value;
+  ASSERT_EQ_INT(ss_model_init(&m, &at, NULL), SS_OK);
+  ASSERT_EQ_INT(
+      ss_orbit_solve(&m, b.n_phases, b.modes, sn->at.durations, &so, &o, NULL),
+      SS_OK);
+  double re[2], im[2];
+  eig2(o.stab.jac_fd, re, im);
+  double off = fmin(fabs(re[0] - 1), fabs(re[1] - 1));
+  printf("fold of the stick-slip family at chi = %.12g (saddle-node at "
+         "%.12g): %d turn of the parameter, lowest chi on the family %.12g, "
+         "largest step in a duration %.3g of the period; finite-difference "
+         "multipliers %.9g, %.9g\n",
+         fold->value, sn->value, turns, least, jump, re[0], re[1]);
+  ASSERT_EQ_INT(turns, 1);
+  ASSERT_TRUE(fabs(fold->value - sn->value) < 1e-8);
+  ASSERT_TRUE(least >= fold->value - 1e-12);
+  ASSERT_TRUE(jump < 0.05);
+  ASSERT_TRUE(im[0] == 0 && off < 1e-6);
+  ss_branch_free(&b);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_ur_family();
@@ -551,5 +627,6 @@ int main(void) {
   test_grazing_curve();
   test_beyond();
   test_neimark_sacker();
+  test_fold();
   TEST_DONE();
 }

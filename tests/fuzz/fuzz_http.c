@@ -109,6 +109,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
               "%s the connection)\n",
               srv_connections_started(d) > started ? "took up"
                                                    : "never took up");
+      int receiving = 0, shut = 0;
+      double age = 0;
+      if (srv_connection_watched(d, sv[1], &receiving, &shut, &age) == 0)
+        fprintf(stderr,
+                "fuzz_http: the monitor watches it: receiving %d, shut %d, "
+                "age %.3f s\n",
+                receiving, shut, age);
+      else
+        fprintf(stderr, "fuzz_http: the monitor does not watch it\n");
       abort();
     }
     if (wr_open && (p.revents & POLLOUT)) {
