@@ -1136,6 +1136,21 @@ unsigned long srv_connections_started(struct srv_daemon *d) {
   return atomic_load(&d->conns_started);
 }
 
+int srv_connection_watched(struct srv_daemon *d, int fd, int *receiving,
+                           int *shut, double *age) {
+  int found = -1;
+  pthread_mutex_lock(&d->mu);
+  for (conn *cn = d->conns; cn; cn = cn->next)
+    if (cn->fd == fd) {
+      *receiving = cn->receiving;
+      *shut = cn->shut;
+      *age = now() - cn->start;
+      found = 0;
+    }
+  pthread_mutex_unlock(&d->mu);
+  return found;
+}
+
 static void wait_in_flight(struct srv_daemon *d, double until) {
   struct timespec ts = {0, 10 * 1000 * 1000};
   while (srv_metrics_in_flight(d->metrics, 0) > 0 && now() < until)

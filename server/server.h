@@ -133,6 +133,12 @@ int srv_add_connection(struct srv_daemon *d, int fd,
  * the daemon started: a connection handed over by srv_add_connection
  * counts once the daemon's thread has taken it up. */
 unsigned long srv_connections_started(struct srv_daemon *d);
+
+/* What the monitor knows of the connection on socket @a fd: 0 with whether
+ * its request is still being received, whether the monitor has shut it
+ * down, and its age in seconds; -1 when it does not watch that socket. */
+int srv_connection_watched(struct srv_daemon *d, int fd, int *receiving,
+                           int *shut, double *age);
 /** The text of the IPv4 or IPv6 address @a s as the daemon writes a
  *  client's address (inet_ntop), into @a out; 0, or -1 when @a s is not
  *  an address. */
