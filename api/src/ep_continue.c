@@ -23,7 +23,7 @@ typedef struct cont_orbit {
 } cont_orbit;
 
 /* follow: {"special": "grazing", "parameter": name, "range": [lo, hi]} */
-static const char *const SPECIALS[] = {"grazing", NULL};
+static const char *const SPECIALS[] = {"grazing", "period_doubling", NULL};
 
 typedef struct cont_follow {
   int special;
@@ -199,12 +199,17 @@ int ep_continue_run(void *xp, const api_call *c) {
     o2.lo = x->follow.range.lo;
     o2.hi = x->follow.range.hi;
     o2.direction = 0;
+    int pd = x->follow.special == 1;
     for (int i = 0; i < x->b.n_special && x->rc == SS_OK; i++) {
       const ss_special *g = &x->b.special[i];
-      if (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "switching"))
+      if (pd ? g->kind != SS_SPECIAL_PERIOD_DOUBLING
+             : g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "switching"))
         continue;
       ss_curve *cv = &x->curves[x->n_curves];
-      int rc = ss_continue_grazing(&x->ap.p, &x->b, g, x->opts.param,
+      int rc =
+          pd ? ss_continue_period_doubling(&x->ap.p, &x->b, g, x->opts.param,
+                                           x->opts.lo, x->opts.hi, &o2, cv, &d)
+             : ss_continue_grazing(&x->ap.p, &x->b, g, x->opts.param,
                                    x->opts.lo, x->opts.hi, &o2, cv, &d);
       if (rc == SS_OK)
         x->n_curves++;
@@ -389,8 +394,10 @@ int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
     const char *n1 = PARAMS[cv->p1], *n2 = PARAMS[cv->p2];
     json_t *co = json_object(), *names = json_array(), *cp = json_array();
     api__set(co, "type", json_string(ss_special_name(cv->kind)));
-    api__set(co, "margin", json_string(cv->margin));
-    api__set(co, "phase", json_integer(cv->phase));
+    if (cv->kind == SS_SPECIAL_GRAZING) {
+      api__set(co, "margin", json_string(cv->margin));
+      api__set(co, "phase", json_integer(cv->phase));
+    }
     json_array_append_new(names, json_string(n1));
     json_array_append_new(names, json_string(n2));
     api__set(co, "parameters", names);

@@ -931,14 +931,15 @@ typedef struct ss_curve_point {
   double v1, v2;                   /**< the first and second parameter */
   double durations[SS_MAX_PHASES]; /**< the orbit there */
   double z0[4];
-  /** The side of v1 on which the orbit exists: +1 above, -1 below */
+  /** A grazing's: the side of v1 on which the orbit exists, +1 above, -1
+   *  below (0 for a period doubling) */
   int feasible_side;
 } ss_curve_point;
 
 /** A curve of special points: where a family's grazing moves as a second
  *  parameter changes. */
 typedef struct ss_curve {
-  ss_special_kind kind; /**< SS_SPECIAL_GRAZING */
+  ss_special_kind kind; /**< SS_SPECIAL_GRAZING or _PERIOD_DOUBLING */
   char margin[24];      /**< the margin that is zero along it */
   int phase;            /**< at the end of this phase */
   ss_param_id p1, p2;
@@ -965,6 +966,19 @@ SS_API int ss_continue_grazing(const ss_params *p, const ss_branch *b,
                                const ss_special *g, ss_param_id p1, double lo1,
                                double hi1, const ss_cont_opts *o2, ss_curve *cv,
                                ss_diag *d);
+
+/**
+ * Follow the period doubling @a pd of the family @a b as a second parameter
+ * moves, as ss_continue_grazing() does a grazing: the duration equations
+ * and det(I + J) = 0 (J the Poincare map's Jacobian), every point a
+ * feasible orbit (the curve ends where it is not).  Points have
+ * feasible_side 0.
+ */
+SS_API int ss_continue_period_doubling(const ss_params *p, const ss_branch *b,
+                                       const ss_special *pd, ss_param_id p1,
+                                       double lo1, double hi1,
+                                       const ss_cont_opts *o2, ss_curve *cv,
+                                       ss_diag *d);
 
 /** Release what ss_continue_grazing() allocated.  NULL-safe. */
 SS_API void ss_curve_free(ss_curve *c);

@@ -742,8 +742,9 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
 
 typedef struct gcont {
   ss_params p;
+  ss_special_kind kind; /* GRAZING or PERIOD_DOUBLING */
   ss_param_id id1, id2;
-  int n, k; /* phases; the grazing is at the end of phase k */
+  int n, k; /* phases; a grazing is at the end of phase k */
   ss_mode modes[SS_MAX_PHASES];
   double lo1, S1, lo2, S2, T;
 } gcont;
@@ -784,8 +785,38 @@ static int gc_values(const gcont *g, const double *y, double *F) {
   int rc = ss_orbit_equations(&m, g->n, g->modes, tau, z0, F, NULL);
   if (rc != SS_OK)
     return rc;
-  F[g->n] = switch_margin(&m, g, tau, z0);
+  if (g->kind == SS_SPECIAL_GRAZING) {
+    F[g->n] = switch_margin(&m, g, tau, z0);
+    return SS_OK;
+  }
+  /* a period doubling: det(I + J) = 0, J the map's analytic Jacobian */
+  ss_stab st;
+  if ((rc = ss_stability(&m, g->n, g->modes, tau, z0, NULL, &st)) != SS_OK)
+    return rc;
+  F[g->n] =
+      (1 + st.jac[0][0]) * (1 + st.jac[1][1]) - st.jac[0][1] * st.jac[1][0];
   return SS_OK;
+}
+
+/* Whether the orbit at y is feasible (a period doubling curve's points
+ * must be orbits). */
+static int gc_feasible(const gcont *g, const double *y) {
+  ss_params p;
+  ss_model m;
+  ss_orbit o;
+  double F[SS_MAX_PHASES];
+  memset(&o, 0, sizeof o);
+  gc_params(g, y, &p);
+  if (ss_model_init(&m, &p, NULL) != SS_OK)
+    return 0;
+  o.n_phases = g->n;
+  for (int k = 0; k < g->n; k++) {
+    o.modes[k] = g->modes[k];
+    o.durations[k] = g->T * y[k];
+  }
+  return ss_orbit_equations(&m, g->n, g->modes, o.durations, o.z0, F, NULL) ==
+             SS_OK &&
+         ss_orbit_check(&m, &o, NULL) == SS_OK;
 }
 
 /* The curve's function, its Jacobian by central differences (the values
@@ -924,8 +955,20 @@ static int gc_follow(const gcont *g, cont *stop, const double *y0, int dir,
                g->lo1 + g->S1 * yn[iq1]);
       return SS_OK;
     }
-    int side = feasible_side(g, yn);
-    if (side == 0) {
+    int side = g->kind == SS_SPECIAL_GRAZING ? feasible_side(g, yn)
+                                             : gc_feasible(g, yn);
+    if (side == 0 && g->kind != SS_SPECIAL_GRAZING) {
+      if ((ds *= 0.5) < ds_min) {
+        snprintf(end, end_n,
+                 "the orbit stops being feasible (a grazing) near %s = %.15g",
+                 ss_param_name(g->id2), g->lo2 + g->S2 * yn[iq2]);
+        return SS_OK;
+      }
+      continue;
+    }
+    if (g->kind != SS_SPECIAL_GRAZING)
+      side = 0;
+    else if (side == 0) {
       if ((ds *= 0.5) < ds_min) {
         snprintf(end, end_n,
                  "the grazing stops being the family's boundary (another "
@@ -962,21 +1005,26 @@ void ss_curve_free(ss_curve *c) {
   memset(c, 0, sizeof *c);
 }
 
-int ss_continue_grazing(const ss_params *p, const ss_branch *b,
-                        const ss_special *g, ss_param_id p1, double lo1,
-                        double hi1, const ss_cont_opts *o2, ss_curve *cv,
-                        ss_diag *d) {
+/* A special point of kind @a kind followed in a second parameter. */
+static int continue_special(const ss_params *p, const ss_branch *b,
+                            const ss_special *g, ss_special_kind kind,
+                            ss_param_id p1, double lo1, double hi1,
+                            const ss_cont_opts *o2, ss_curve *cv, ss_diag *d) {
   if (!cv)
     return ss__fail(d, SS_EINVAL, "curve", 0, "no output");
   memset(cv, 0, sizeof *cv);
   if (!p || !b || !g || !o2)
     return ss__fail(d, SS_EINVAL, "opts", 0, "a NULL argument");
-  if (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "switching") ||
-      g->at.min_margin.phase < 0 ||
-      b->modes[g->at.min_margin.phase] == SS_MODE_STICK)
+  if (kind == SS_SPECIAL_GRAZING &&
+      (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "switching") ||
+       g->at.min_margin.phase < 0 ||
+       b->modes[g->at.min_margin.phase] == SS_MODE_STICK))
     return ss__fail(d, SS_EINVAL, "special", 0,
                     "only a grazing of the switching condition at the end of "
                     "a slip or overshoot can be followed");
+  if (kind == SS_SPECIAL_PERIOD_DOUBLING &&
+      g->kind != SS_SPECIAL_PERIOD_DOUBLING)
+    return ss__fail(d, SS_EINVAL, "special", 0, "not a period doubling");
   if (!ss_param_name(p1) || !ss_param_name(o2->param) || o2->param == p1)
     return ss__fail(d, SS_EINVAL, "parameter", (double)o2->param,
                     "the second parameter must be another one");
@@ -987,11 +1035,12 @@ int ss_continue_grazing(const ss_params *p, const ss_branch *b,
   gcont gc;
   memset(&gc, 0, sizeof gc);
   gc.p = *p;
+  gc.kind = kind;
   *param_ref(&gc.p, p1) = g->value;
   gc.id1 = p1;
   gc.id2 = o2->param;
   gc.n = b->n_phases;
-  gc.k = g->at.min_margin.phase;
+  gc.k = kind == SS_SPECIAL_GRAZING ? g->at.min_margin.phase : 0;
   memcpy(gc.modes, b->modes, sizeof gc.modes);
   gc.lo1 = lo1;
   gc.S1 = hi1 - lo1;
@@ -1018,8 +1067,8 @@ int ss_continue_grazing(const ss_params *p, const ss_branch *b,
   int rc = correct(&c, y0, a, base, &iters, &res);
   if (rc != SS_OK)
     return ss__fail(d, SS_ENOCONV, "special", g->value,
-                    "no grazing curve through the located point");
-  int side = feasible_side(&gc, y0);
+                    "no curve through the located point");
+  int side = kind == SS_SPECIAL_GRAZING ? feasible_side(&gc, y0) : 0;
   cont stop;
   memset(&stop, 0, sizeof stop);
   stop.t0 = ss__now();
@@ -1052,8 +1101,9 @@ int ss_continue_grazing(const ss_params *p, const ss_branch *b,
     cv->points[nd + 1 + k] = up[k];
   cv->n_points = nd + nu + 1;
   cv->start = nd;
-  cv->kind = SS_SPECIAL_GRAZING;
-  snprintf(cv->margin, sizeof cv->margin, "%s", g->margin);
+  cv->kind = kind;
+  snprintf(cv->margin, sizeof cv->margin, "%s",
+           kind == SS_SPECIAL_GRAZING ? g->margin : "");
   cv->phase = gc.k;
   cv->p1 = p1;
   cv->p2 = gc.id2;
@@ -1065,6 +1115,21 @@ int ss_continue_grazing(const ss_params *p, const ss_branch *b,
                     rc == SS_ECANCELED ? "cancelled"
                                        : "the time budget ran out");
   return SS_OK;
+}
+
+int ss_continue_grazing(const ss_params *p, const ss_branch *b,
+                        const ss_special *g, ss_param_id p1, double lo1,
+                        double hi1, const ss_cont_opts *o2, ss_curve *cv,
+                        ss_diag *d) {
+  return continue_special(p, b, g, SS_SPECIAL_GRAZING, p1, lo1, hi1, o2, cv, d);
+}
+
+int ss_continue_period_doubling(const ss_params *p, const ss_branch *b,
+                                const ss_special *pd, ss_param_id p1,
+                                double lo1, double hi1, const ss_cont_opts *o2,
+                                ss_curve *cv, ss_diag *d) {
+  return continue_special(p, b, pd, SS_SPECIAL_PERIOD_DOUBLING, p1, lo1, hi1,
+                          o2, cv, d);
 }
 
 /* ---- the period-2 family at a period doubling ------------------------- */

@@ -618,6 +618,72 @@ static void test_fold(void) {
   ss_branch_free(&b);
 }
 
+/* EVIDENCE: README "Families": a period doubling followed in a second
+ * parameter: at every point of the curve the orbit is feasible and the
+ * finite-difference Jacobian of the simulated map has a multiplier -1 */
+static void test_period_doubling_curve(void) {
+  ss_params p = PAPER;
+  p.ur = 12 * p.us;
+  ss_orbit start;
+  ASSERT_EQ_INT(overshoot_at(&p, &start), 1);
+  ss_cont_opts co, o2;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_CHI;
+  co.lo = 0.01;
+  co.hi = 0.99;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&p, &start, &co, &b, NULL), SS_OK);
+  memset(&o2, 0, sizeof o2);
+  o2.param = SS_PARAM_UR;
+  o2.lo = 0.3;
+  o2.hi = 2.0;
+  o2.max_points = 400;
+  int curves = 0;
+  for (int i = 0; i < b.n_special; i++) {
+    const ss_special *pd = &b.special[i];
+    if (pd->kind != SS_SPECIAL_PERIOD_DOUBLING)
+      continue;
+    ss_curve cv;
+    ASSERT_EQ_INT(ss_continue_period_doubling(&p, &b, pd, SS_PARAM_CHI, 0.01,
+                                              0.99, &o2, &cv, NULL),
+                  SS_OK);
+    ASSERT_TRUE(cv.n_points > 10);
+    double worst = 0;
+    int near = 0;
+    for (int k = 0; k < cv.n_points; k++) {
+      ss_params q = p;
+      ss_model m;
+      ss_orbit o;
+      ss_stab_opts so = {0, 1};
+      q.chi = cv.points[k].v1;
+      q.ur = cv.points[k].v2;
+      ASSERT_EQ_INT(ss_model_init(&m, &q, NULL), SS_OK);
+      ASSERT_EQ_INT(ss_orbit_solve(&m, b.n_phases, b.modes,
+                                   cv.points[k].durations, &so, &o, NULL),
+                    SS_OK);
+      if (o.min_margin.value < 1e-5) { /* no differences across a boundary */
+        near++;
+        continue;
+      }
+      double re[2], im[2];
+      eig2(o.stab.jac_fd, re, im);
+      worst = fmax(worst, im[0] != 0 ? INFINITY
+                                     : fmin(fabs(re[0] + 1), fabs(re[1] + 1)));
+    }
+    printf("period doubling at chi = %.9g followed in ur: %d points from "
+           "ur = %.6g to %.6g, finite-difference multiplier -1 within %.2g "
+           "(%d points next to a grazing not compared); ends: %s | %s\n",
+           pd->value, cv.n_points, cv.points[0].v2,
+           cv.points[cv.n_points - 1].v2, worst, near, cv.end[0], cv.end[1]);
+    ASSERT_TRUE(worst < 1e-6);
+    ASSERT_TRUE(cv.n_points - near >= 20);
+    ss_curve_free(&cv);
+    curves++;
+  }
+  ASSERT_EQ_INT(curves, 2);
+  ss_branch_free(&b);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_ur_family();
@@ -628,5 +694,6 @@ int main(void) {
   test_beyond();
   test_neimark_sacker();
   test_fold();
+  test_period_doubling_curve();
   TEST_DONE();
 }
