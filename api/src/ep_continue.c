@@ -10,7 +10,11 @@
 
 #include "endpoints.h"
 
-static const char *const PARAMS[] = {"chi", "eta", "us", "ur", "V", NULL};
+/* The dimensionless parameters (ss_param_id), then the physical ones
+ * (ss_phys_id + 5) for a request in physical units. */
+static const char *const PARAMS[] = {"chi", "eta", "us", "ur", "V",  "m1", "m2",
+                                     "k1",  "k2",  "Fs", "Fr", "v0", NULL};
+enum { N_DIMENSIONLESS = 5 };
 static const char *const DIRECTIONS[] = {"both", "up", "down", NULL};
 static const int DIRECTION_OF[] = {0, 1, -1};
 
@@ -140,20 +144,36 @@ int ep_continue_decode(const json_t *root, const api_call *c, void **xp) {
   if (api__decode_request(&SPEC, root, x, &x->ap, c) ||
       (x->has_guess && api__guess_modes(&x->guess, "/guess", c)))
     return -1;
-  if (x->ap.has_physical)
-    return api__fail(c->e, API_P_INVALID_VALUE, "/physical",
-                     "/continue follows a dimensionless parameter: give "
-                     "\"params\" (see /orbit's input.params for the "
-                     "dimensionless form of physical parameters)");
+  int physical = x->parameter >= N_DIMENSIONLESS;
+  if (x->ap.has_physical != physical)
+    return api__fail(c->e, API_P_INVALID_VALUE, "/parameter",
+                     x->ap.has_physical
+                         ? "/parameter must be a physical parameter (m1, m2, "
+                           "k1, k2, Fs, Fr, v0) for a request in physical "
+                           "units"
+                         : "/parameter must be a dimensionless parameter "
+                           "(chi, eta, us, ur, V); send \"physical\" to "
+                           "continue a physical one");
+  if (physical && (x->has_follow || x->branch_switching))
+    return api__fail(c->e, API_P_INVALID_VALUE,
+                     x->has_follow ? "/follow" : "/branch_switching",
+                     "follow and branch_switching work in the dimensionless "
+                     "parameters only; send \"params\"");
   const api_modes *modes =
       x->has_orbit ? &x->orbit.phases.modes : &x->guess.modes;
   const api_durations *dur =
       x->has_orbit ? &x->orbit.phases.dur : &x->guess.durations;
   x->start.n_phases = modes->n;
   memcpy(x->start.modes, modes->m, (size_t)modes->n * sizeof(ss_mode));
-  memcpy(x->start.durations, dur->v, (size_t)dur->n * sizeof(double));
+  for (int k = 0; k < dur->n; k++)
+    x->start.durations[k] = api__time_in(&x->ap, dur->v[k]);
   ss_cont_opts *o = &x->opts;
-  o->param = (ss_param_id)x->parameter;
+  if (physical) {
+    o->physical = &x->ap.ph;
+    o->phys = (ss_phys_id)(x->parameter - N_DIMENSIONLESS);
+  } else {
+    o->param = (ss_param_id)x->parameter;
+  }
   o->lo = x->range.lo;
   o->hi = x->range.hi;
   o->max_points = (int)x->max_points;
@@ -165,10 +185,16 @@ int ep_continue_decode(const json_t *root, const api_call *c, void **xp) {
     o->cancel_cls = c->srv->cancel_cls;
   }
   const ss_params *p = &x->ap.p;
-  const double values[] = {p->chi, p->eta, p->us, p->ur, p->V};
+  const ss_physical *ph = &x->ap.ph;
+  const double values[] = {p->chi, p->eta, p->us,  p->ur,  p->V,   ph->m1,
+                           ph->m2, ph->k1, ph->k2, ph->Fs, ph->Fr, ph->v0};
   double v0 = values[x->parameter];
   if (x->has_follow) {
     double v2 = values[x->follow.parameter];
+    if (x->follow.parameter >= N_DIMENSIONLESS)
+      return api__fail(c->e, API_P_INVALID_VALUE, "/follow/parameter",
+                       "/follow/parameter must be a dimensionless parameter "
+                       "(chi, eta, us, ur, V)");
     if (x->follow.parameter == x->parameter)
       return api__fail(c->e, API_P_INVALID_VALUE, "/follow/parameter",
                        "/follow/parameter must differ from /parameter");
@@ -265,33 +291,52 @@ static json_t *multipliers(const double re[2], const double im[2]) {
   return a;
 }
 
-static json_t *margin(const ss_margin *mg) {
+/* The time scale at a point: 1 for a dimensionless request; for a
+ * physical one, omega of the physical parameters with the continued one at
+ * @a value. */
+static double omega_at(const cont_x *x, double value) {
+  if (!x->opts.physical)
+    return 1;
+  ss_physical ph = x->ap.ph;
+  double *f[] = {&ph.m1, &ph.m2, &ph.k1, &ph.k2, &ph.Fs, &ph.Fr, &ph.v0};
+  ss_params p;
+  double omega = 1;
+  *f[x->opts.phys] = value;
+  ss_params_from_physical(&ph, &p, &omega, NULL);
+  return omega;
+}
+
+static json_t *margin(const ss_margin *mg, double omega) {
   json_t *o = json_object();
   api__set(o, "value", api__real(mg->value));
   if (mg->phase >= 0) {
     api__set(o, "phase", json_integer(mg->phase));
-    api__set(o, "t", api__real(mg->t));
+    api__set(o, "t", api__real(mg->t / omega));
   }
   return o;
 }
 
-static json_t *point(const ss_cont_point *p, int n) {
+/* A point in the request's units: times over omega, the start state as
+ * ss_to_physical gives it. */
+static json_t *point(const cont_x *x, const ss_cont_point *p, int n) {
+  double omega = omega_at(x, p->value), dur[SS_MAX_PHASES], z0[4];
+  for (int k = 0; k < n; k++)
+    dur[k] = p->durations[k] / omega;
+  ss_to_physical(omega, 0, p->z0, NULL, z0);
   json_t *o = json_object();
   api__set(o, "value", api__real(p->value));
-  api__set(o, "period", api__real(p->period));
-  api__set(o, "durations", api__vec(p->durations, n));
-  api__set(o, "z0", api__vec4(p->z0));
+  api__set(o, "period", api__real(p->period / omega));
+  api__set(o, "durations", api__vec(dur, n));
+  api__set(o, "z0", api__vec4(z0));
   api__set(o, "n_turns", json_integer(p->n_turns));
   api__set(o, "spectral_radius", api__real(p->spectral_radius));
   api__set(o, "multipliers", multipliers(p->eig_re, p->eig_im));
   api__set(o, "stable", json_boolean(p->stable));
-  api__set(o, "min_margin", margin(&p->min_margin));
+  api__set(o, "min_margin", margin(&p->min_margin, omega));
   api__set(o, "residual", api__real(p->residual));
   return o;
 }
 
-/* A family as JSON; for the first, the period-2 families its period
- * doublings start (their index in "branches"), or why none. */
 /* What the motion does just past a grazing that ends the family. */
 static json_t *beyond_json(const cont_x *x, const ss_branch *b,
                            const ss_special *g, ss_param_id id) {
@@ -331,7 +376,7 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
            json_integer(b->n_points ? b->points[0].n_turns : 1));
   json_t *pts = json_array();
   for (int i = 0; i < b->n_points; i++)
-    json_array_append_new(pts, point(&b->points[i], b->n_phases));
+    json_array_append_new(pts, point(x, &b->points[i], b->n_phases));
   api__set(br, "points", pts);
   api__set(br, "start", json_integer(b->start));
   json_t *sp = json_array();
@@ -344,9 +389,10 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
     if (s->kind == SS_SPECIAL_GRAZING) {
       api__set(o, "margin", json_string(s->margin));
       api__set(o, "phase", json_integer(s->at.min_margin.phase));
-      api__set(o, "t", api__real(s->at.min_margin.t));
+      api__set(o, "t", api__real(s->at.min_margin.t / omega_at(x, s->value)));
       api__set(o, "margin_value", api__real(s->at.min_margin.value));
-      api__set(o, "beyond", beyond_json(x, b, s, x->opts.param));
+      if (!x->opts.physical)
+        api__set(o, "beyond", beyond_json(x, b, s, x->opts.param));
     }
     api__set(o, "multipliers", multipliers(s->at.eig_re, s->at.eig_im));
     api__set(o, "stable_before", json_boolean(s->stable_before));
@@ -362,7 +408,7 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
       else
         api__set(o, "no_branch", json_string(x->why_none[i]));
     }
-    api__set(o, "orbit", point(&s->at, b->n_phases));
+    api__set(o, "orbit", point(x, &s->at, b->n_phases));
     json_array_append_new(sp, o);
   }
   api__set(br, "special", sp);

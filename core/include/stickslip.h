@@ -772,6 +772,23 @@ SS_API const char *ss_param_name(ss_param_id id);
 /** The parameter called @a name; SS_OK or SS_EINVAL. */
 SS_API int ss_param_by_name(const char *name, ss_param_id *id);
 
+/** The physical parameters, for continuation in physical units. */
+typedef enum ss_phys_id {
+  SS_PHYS_M1 = 0,
+  SS_PHYS_M2 = 1,
+  SS_PHYS_K1 = 2,
+  SS_PHYS_K2 = 3,
+  SS_PHYS_FS = 4,
+  SS_PHYS_FR = 5,
+  SS_PHYS_V0 = 6
+} ss_phys_id;
+
+/** "m1", "m2", "k1", "k2", "Fs", "Fr", "v0"; NULL for anything else. */
+SS_API const char *ss_phys_name(ss_phys_id id);
+
+/** The physical parameter called @a name; SS_OK or SS_EINVAL. */
+SS_API int ss_phys_by_name(const char *name, ss_phys_id *id);
+
 /** One orbit of a family. */
 typedef struct ss_cont_point {
   double value;                    /**< the continued parameter */
@@ -826,7 +843,13 @@ typedef struct ss_cont_opts {
   /** The first step, in the scaled arclength (parameter over (hi - lo),
    *  durations over the start's period); 0: 0.02 */
   double step;
-  int direction;      /**< 0 both ways from the start, +1 up, -1 down */
+  int direction; /**< 0 both ways from the start, +1 up, -1 down */
+  /** Non-NULL: continue the physical parameter @a phys of *physical
+   *  instead of @a param (lo, hi and the points' values in its unit; the
+   *  dimensionless parameters of every point are derived from it, the
+   *  points' times stay dimensionless).  Only ss_continue() reads it. */
+  const ss_physical *physical;
+  ss_phys_id phys;
   double max_seconds; /**< time budget (0: none) */
   /** Polled between steps: a non-zero answer stops with SS_ECANCELED. */
   int (*cancelled)(void *cls);

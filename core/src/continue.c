@@ -54,6 +54,27 @@ int ss_param_by_name(const char *name, ss_param_id *id) {
   return SS_EINVAL;
 }
 
+static const char *const PHYS_NAMES[] = {"m1", "m2", "k1", "k2",
+                                         "Fs", "Fr", "v0"};
+
+const char *ss_phys_name(ss_phys_id id) {
+  return (unsigned)id < 7 ? PHYS_NAMES[id] : NULL;
+}
+
+int ss_phys_by_name(const char *name, ss_phys_id *id) {
+  for (int i = 0; name && id && i < 7; i++)
+    if (!strcmp(name, PHYS_NAMES[i])) {
+      *id = (ss_phys_id)i;
+      return SS_OK;
+    }
+  return SS_EINVAL;
+}
+
+static double *phys_ref(ss_physical *ph, ss_phys_id id) {
+  double *v[] = {&ph->m1, &ph->m2, &ph->k1, &ph->k2, &ph->Fs, &ph->Fr, &ph->v0};
+  return (unsigned)id < 7 ? v[id] : NULL;
+}
+
 static const char *const SPECIAL_NAMES[] = {
     "grazing", "fold", "saddle_node", "period_doubling", "neimark_sacker"};
 
@@ -87,6 +108,9 @@ static double *param_ref(ss_params *p, ss_param_id id) {
 typedef struct cont {
   ss_params p; /* the others, as given */
   ss_param_id id;
+  int phys; /* continuing the physical parameter pid of ph */
+  ss_physical ph;
+  ss_phys_id pid;
   int n;
   const ss_mode *modes;
   double lo, hi, S; /* p = lo + S q */
@@ -104,8 +128,20 @@ static double value_of(const cont *c, const double *y) {
 
 static int model_at(const cont *c, double v, ss_model *m) {
   ss_params p = c->p;
-  *param_ref(&p, c->id) = v;
+  if (c->phys) {
+    ss_physical ph = c->ph;
+    *phys_ref(&ph, c->pid) = v;
+    if (ss_params_from_physical(&ph, &p, NULL, NULL) != SS_OK)
+      return SS_EDOMAIN;
+  } else {
+    *param_ref(&p, c->id) = v;
+  }
   return ss_model_init(m, &p, NULL);
+}
+
+/* The name of the continued parameter. */
+static const char *cont_name(const cont *c) {
+  return c->phys ? ss_phys_name(c->pid) : ss_param_name(c->id);
 }
 
 /* F(y) (n values) and, when J is not NULL, dF/dy (n x (n+1), row-major). */
@@ -243,7 +279,7 @@ static int point_at(const cont *c, const double *y, double res,
   memset(pt, 0, sizeof *pt);
   pt->value = value_of(c, y);
   if (model_at(c, pt->value, &m) != SS_OK)
-    return ss__fail(d, SS_INFEASIBLE, ss_param_name(c->id), pt->value,
+    return ss__fail(d, SS_INFEASIBLE, cont_name(c), pt->value,
                     "the parameter left its domain");
   o.n_phases = n;
   o.kind = ss_orbit_kind_of(n, c->modes);
@@ -436,7 +472,7 @@ static void locate(cont *c, const double *ya, const double *yb,
       "", "the family turns back", "a real multiplier crosses +1",
       "a real multiplier crosses -1", "a complex pair crosses the unit circle"};
   snprintf(s.detail, sizeof s.detail, "%.40s at %.4s = %.15g%.40s%.30s",
-           WHAT[kind], ss_param_name(c->id), s.value,
+           WHAT[kind], cont_name(c), s.value,
            pa->stable != pb->stable
                ? (pa->stable ? "; stable before, unstable after"
                              : "; unstable before, stable after")
@@ -487,7 +523,7 @@ static void locate_grazing(cont *c, const double *ya, const double *yb,
   snprintf(s.detail, sizeof s.detail,
            "the %.24s margin reaches zero in phase %d at %.4s = %.15g%.30s; "
            "beyond: %.90s",
-           s.margin, plo.min_margin.phase, ss_param_name(c->id), s.value,
+           s.margin, plo.min_margin.phase, cont_name(c), s.value,
            ok ? "" : " (not located to 1e-10)", why);
   add_special(b, &s);
   *last = plo;
@@ -559,8 +595,8 @@ static int follow(cont *c, const double *y0, int dir, double step0,
         snprintf(end, end_n,
                  "the corrector failed at the smallest step (%s) at %s = "
                  "%.15g",
-                 ss_strerror(rc != SS_OK ? rc : SS_ENOCONV),
-                 ss_param_name(c->id), value_of(c, y));
+                 ss_strerror(rc != SS_OK ? rc : SS_ENOCONV), cont_name(c),
+                 value_of(c, y));
         return SS_OK;
       }
       continue;
@@ -579,8 +615,8 @@ static int follow(cont *c, const double *y0, int dir, double step0,
       if (correct(&c->cv, yn, a, base, &iters, &res) != SS_OK ||
           tangent(&c->cv, yn, t, tn) != SS_OK) {
         if ((ds *= 0.5) < ds_min) {
-          snprintf(end, end_n, "no orbit on the bound %s = %.15g",
-                   ss_param_name(c->id), bound);
+          snprintf(end, end_n, "no orbit on the bound %s = %.15g", cont_name(c),
+                   bound);
           return SS_OK;
         }
         continue;
@@ -598,8 +634,8 @@ static int follow(cont *c, const double *y0, int dir, double step0,
                      &last);
       if ((rc = push(v, nv, cap, &last)) != SS_OK)
         return rc;
-      snprintf(end, end_n, "grazing at %s = %.15g: %.120s",
-               ss_param_name(c->id), last.value, why.text);
+      snprintf(end, end_n, "grazing at %s = %.15g: %.120s", cont_name(c),
+               last.value, why.text);
       return SS_OK;
     }
     /* a period-2 family that meets the orbit it was born from: its halves
@@ -610,7 +646,7 @@ static int follow(cont *c, const double *y0, int dir, double step0,
       snprintf(end, end_n,
                "returns to the orbit of half its period, at its period "
                "doubling, after %s = %.15g (its halves swap)",
-               ss_param_name(c->id), prev.value);
+               cont_name(c), prev.value);
       return SS_OK;
     }
     /* sign changes between prev and pt */
@@ -631,8 +667,8 @@ static int follow(cont *c, const double *y0, int dir, double step0,
     memcpy(t, tn, sizeof t);
     prev = pt;
     if (at_bound) {
-      snprintf(end, end_n, "the end of the range, %s = %.15g",
-               ss_param_name(c->id), pt.value);
+      snprintf(end, end_n, "the end of the range, %s = %.15g", cont_name(c),
+               pt.value);
       return SS_OK;
     }
     if (iters <= 3)
@@ -651,7 +687,7 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
   memset(b, 0, sizeof *b);
   if (!p || !start || !opts)
     return ss__fail(d, SS_EINVAL, "opts", 0, "a NULL argument");
-  if (!ss_param_name(opts->param))
+  if (opts->physical ? !ss_phys_name(opts->phys) : !ss_param_name(opts->param))
     return ss__fail(d, SS_EINVAL, "parameter", (double)opts->param,
                     "unknown parameter");
   if (!(opts->lo < opts->hi) || !isfinite(opts->lo) || !isfinite(opts->hi))
@@ -664,12 +700,22 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
   memset(&c, 0, sizeof c);
   c.p = *p;
   c.id = opts->param;
-  double v0 = *param_ref(&c.p, c.id);
+  double v0;
+  if (opts->physical) {
+    c.phys = 1;
+    c.ph = *opts->physical;
+    c.pid = opts->phys;
+    v0 = *phys_ref(&c.ph, c.pid);
+    if (ss_params_from_physical(&c.ph, &c.p, NULL, d) != SS_OK)
+      return ss__fail(d, SS_EINVAL, "physical", 0, "bad physical parameters");
+  } else {
+    v0 = *param_ref(&c.p, c.id);
+  }
   if (!(v0 >= opts->lo && v0 <= opts->hi))
     return ss__fail(d, SS_EINVAL, "range", v0,
                     "the start's %s = %.15g is outside the range [%.15g, "
                     "%.15g]",
-                    ss_param_name(c.id), v0, opts->lo, opts->hi);
+                    cont_name(&c), v0, opts->lo, opts->hi);
   c.n = start->n_phases;
   c.modes = start->modes;
   c.lo = opts->lo;
@@ -683,7 +729,7 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
   /* the start, solved again at p */
   ss_model m;
   ss_orbit o;
-  int rc = ss_model_init(&m, p, d);
+  int rc = ss_model_init(&m, &c.p, d);
   if (rc != SS_OK)
     return rc;
   if ((rc = ss_orbit_solve(&m, start->n_phases, start->modes, start->durations,

@@ -143,7 +143,8 @@ static void test_ur_family(void) {
   ASSERT_EQ_INT(g->at.min_margin.phase, 0);
   ASSERT_TRUE(g->precision <= 1e-10);
   ASSERT_TRUE(g->value == b.points[0].value);
-  ASSERT_TRUE(strstr(b.end[0], "grazing") != NULL);
+  ASSERT_TRUE(strstr(b.end[0], "grazing at ur = ") != NULL);
+  ASSERT_TRUE(strstr(g->detail, "at ur = ") != NULL);
   /* the rk8pd reference at the located value */
   ss_params at = PAPER;
   at.ur = g->value;
@@ -684,6 +685,70 @@ static void test_period_doubling_curve(void) {
   ss_branch_free(&b);
 }
 
+/* EVIDENCE: README "Families": continuation in a physical parameter; Fr is
+ * ur (k1 + k2), so the paper's boundary in Fr is ten times the one in ur;
+ * a family in m1 (which moves eta, V and the time scale together) closes
+ * by simulation at every point */
+static void test_physical(void) {
+  ss_physical ph = {2.5, 0.625, 8, 2, 0.724, 6.178, 2};
+  ss_params p;
+  double omega;
+  ASSERT_EQ_INT(ss_params_from_physical(&ph, &p, &omega, NULL), SS_OK);
+  ss_orbit start;
+  ASSERT_EQ_INT(overshoot_at(&p, &start), 1);
+  ss_cont_opts co;
+  memset(&co, 0, sizeof co);
+  co.physical = &ph;
+  co.phys = SS_PHYS_FR;
+  co.lo = 3;
+  co.hi = 15;
+  co.direction = -1;
+  ss_branch b, bu;
+  ASSERT_EQ_INT(ss_continue(&p, &start, &co, &b, NULL), SS_OK);
+  ASSERT_EQ_INT(b.n_special, 1);
+  co.physical = NULL;
+  co.param = SS_PARAM_UR;
+  co.lo = 0.3;
+  co.hi = 1.5;
+  ASSERT_EQ_INT(ss_continue(&p, &start, &co, &bu, NULL), SS_OK);
+  double rel =
+      fabs(b.special[0].value / 10 - bu.special[0].value) / bu.special[0].value;
+  printf("in Fr the boundary is at %.12g, ten times the one in ur (%.12g) "
+         "to %.2g\n",
+         b.special[0].value, bu.special[0].value, rel);
+  ASSERT_TRUE(rel < 1e-9);
+  ASSERT_TRUE(strstr(b.end[0], "grazing at Fr = ") != NULL);
+  ss_branch_free(&b);
+  ss_branch_free(&bu);
+  /* m1 over [1, 6] */
+  co.physical = &ph;
+  co.phys = SS_PHYS_M1;
+  co.lo = 1;
+  co.hi = 6;
+  co.direction = 0;
+  ASSERT_EQ_INT(ss_continue(&p, &start, &co, &b, NULL), SS_OK);
+  ASSERT_TRUE(b.n_points > 5);
+  for (int i = 0; i < b.n_points; i++) {
+    ss_physical q = ph;
+    ss_params pq;
+    ss_model m;
+    ss_orbit o;
+    q.m1 = b.points[i].value;
+    ASSERT_EQ_INT(ss_params_from_physical(&q, &pq, NULL, NULL), SS_OK);
+    ASSERT_EQ_INT(ss_model_init(&m, &pq, NULL), SS_OK);
+    memset(&o, 0, sizeof o);
+    o.n_phases = b.n_phases;
+    memcpy(o.modes, b.modes, sizeof o.modes);
+    memcpy(o.durations, b.points[i].durations, sizeof o.durations);
+    memcpy(o.z0, b.points[i].z0, sizeof o.z0);
+    ASSERT_EQ_INT(ss_orbit_check(&m, &o, NULL), SS_OK);
+    ASSERT_TRUE(o.closure < 1e-12);
+  }
+  printf("in m1: %d points from m1 = %.9g to %.9g; %s / %s\n", b.n_points,
+         b.points[0].value, b.points[b.n_points - 1].value, b.end[0], b.end[1]);
+  ss_branch_free(&b);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_ur_family();
@@ -695,5 +760,6 @@ int main(void) {
   test_neimark_sacker();
   test_fold();
   test_period_doubling_curve();
+  test_physical();
   TEST_DONE();
 }
