@@ -140,7 +140,8 @@ static int curve_points(void) {
   o2.param = SS_PARAM_CHI;
   o2.lo = 0.05;
   o2.hi = 0.6;
-  o2.max_points = 1000;
+  o2.max_points = 200; /* a 200-point curve: the middle of the boundary */
+  o2.step = 0.005;
   ss_continue_grazing(&PAPER, &DOWN, &DOWN.special[0], SS_PARAM_UR, 0.3, 1.5,
                       &o2, &cv, NULL);
   int n = cv.n_points;
@@ -182,8 +183,8 @@ int main(int argc, char **argv) {
   int n_curve = curve_points();
   char w_up[160], w_ur[160], w_chi[160], w_curve[160];
   snprintf(w_curve, sizeof w_curve,
-           "the boundary ur*(chi): the grazing followed in chi over [0.05, "
-           "0.6] (%d points)",
+           "the boundary ur*(chi): the grazing followed in chi (%d points, "
+           "step 0.005)",
            n_curve);
   snprintf(w_up, sizeof w_up,
            "continue the paper's family in ur up to 1.5 (%d points, no "

@@ -35,6 +35,10 @@ typedef struct cont_follow {
   cont_range range;
 } cont_follow;
 
+typedef struct cont_fields {
+  unsigned mask; /* bit k: POINT_FIELDS[k] */
+} cont_fields;
+
 typedef struct cont_x {
   /* the request */
   api_params ap;
@@ -50,6 +54,7 @@ typedef struct cont_x {
   cont_follow follow;
   int has_follow;
   int branch_switching;
+  cont_fields fields;
   /* for the core */
   ss_orbit start;
   ss_cont_opts opts;
@@ -93,6 +98,50 @@ static json_t *echo_range(const void *dest) {
 
 static const api_custom RANGE = {decode_range, echo_range};
 
+/* "fields": the per-point fields to return ("value" always is). */
+static const char *const POINT_FIELDS[] = {
+    "value",           "period",      "durations", "z0",         "n_turns",
+    "spectral_radius", "multipliers", "stable",    "min_margin", "residual"};
+enum { N_POINT_FIELDS = 10 };
+
+static int decode_fields(const json_t *v, const char *ptr, void *dest,
+                         const api_call *c) {
+  cont_fields *f = dest;
+  if (!json_is_array(v))
+    return api__fail(c->e, API_P_INVALID_TYPE, ptr,
+                     "%s must be an array of field names", ptr);
+  f->mask = 1; /* value */
+  for (size_t i = 0; i < json_array_size(v); i++) {
+    const json_t *e = json_array_get(v, i);
+    char p[160];
+    int k = 0;
+    snprintf(p, sizeof p, "%s/%zu", ptr, i);
+    if (!json_is_string(e))
+      return api__fail(c->e, API_P_INVALID_TYPE, p, "%s must be a string", p);
+    while (k < N_POINT_FIELDS && strcmp(json_string_value(e), POINT_FIELDS[k]))
+      k++;
+    if (k == N_POINT_FIELDS)
+      return api__fail(c->e, API_P_INVALID_VALUE, p,
+                       "%s: no point field \"%.40s\" (value, period, "
+                       "durations, z0, n_turns, spectral_radius, multipliers, "
+                       "stable, min_margin, residual)",
+                       p, json_string_value(e));
+    f->mask |= 1u << k;
+  }
+  return 0;
+}
+
+static json_t *echo_fields(const void *dest) {
+  const cont_fields *f = dest;
+  json_t *a = json_array();
+  for (int k = 0; k < N_POINT_FIELDS; k++)
+    if (f->mask & (1u << k))
+      json_array_append_new(a, json_string(POINT_FIELDS[k]));
+  return a;
+}
+
+static const api_custom FIELDS_OF_POINTS = {decode_fields, echo_fields};
+
 #define PHASES_FIELD                                                           \
   {                                                                            \
     "phases", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL,                          \
@@ -132,6 +181,8 @@ static const api_field FIELDS[] = {
      API_HAS(cont_x, has_follow), 0, 0, &FOLLOW_SPEC},
     {"branch_switching", API_T_BOOL, API_DEFAULT, 0, 0, NULL,
      offsetof(cont_x, branch_switching)},
+    {"fields", API_T_CUSTOM, API_DEFAULT, 0, 0, NULL, offsetof(cont_x, fields),
+     0, 0, 0, &FIELDS_OF_POINTS},
 };
 static const api_spec SPEC = API_SPEC(FIELDS);
 
@@ -141,6 +192,7 @@ int ep_continue_decode(const json_t *root, const api_call *c, void **xp) {
     return -1;
   x->max_points = 200;
   x->step = 0.02;
+  x->fields.mask = (1u << N_POINT_FIELDS) - 1;
   if (api__decode_request(&SPEC, root, x, &x->ap, c) ||
       (x->has_guess && api__guess_modes(&x->guess, "/guess", c)))
     return -1;
@@ -318,22 +370,29 @@ static json_t *margin(const ss_margin *mg, double omega) {
 
 /* A point in the request's units: times over omega, the start state as
  * ss_to_physical gives it. */
-static json_t *point(const cont_x *x, const ss_cont_point *p, int n) {
+static json_t *point(const cont_x *x, const ss_cont_point *p, int n,
+                     unsigned mask) {
   double omega = omega_at(x, p->value), dur[SS_MAX_PHASES], z0[4];
   for (int k = 0; k < n; k++)
     dur[k] = p->durations[k] / omega;
   ss_to_physical(omega, 0, p->z0, NULL, z0);
+  json_t *v[N_POINT_FIELDS] = {api__real(p->value),
+                               api__real(p->period / omega),
+                               api__vec(dur, n),
+                               api__vec4(z0),
+                               json_integer(p->n_turns),
+                               api__real(p->spectral_radius),
+                               multipliers(p->eig_re, p->eig_im),
+                               json_boolean(p->stable),
+                               margin(&p->min_margin, omega),
+                               api__real(p->residual)};
   json_t *o = json_object();
-  api__set(o, "value", api__real(p->value));
-  api__set(o, "period", api__real(p->period / omega));
-  api__set(o, "durations", api__vec(dur, n));
-  api__set(o, "z0", api__vec4(z0));
-  api__set(o, "n_turns", json_integer(p->n_turns));
-  api__set(o, "spectral_radius", api__real(p->spectral_radius));
-  api__set(o, "multipliers", multipliers(p->eig_re, p->eig_im));
-  api__set(o, "stable", json_boolean(p->stable));
-  api__set(o, "min_margin", margin(&p->min_margin, omega));
-  api__set(o, "residual", api__real(p->residual));
+  for (int k = 0; k < N_POINT_FIELDS; k++) {
+    if (mask & (1u << k))
+      api__set(o, POINT_FIELDS[k], v[k]);
+    else
+      json_decref(v[k]);
+  }
   return o;
 }
 
@@ -376,7 +435,8 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
            json_integer(b->n_points ? b->points[0].n_turns : 1));
   json_t *pts = json_array();
   for (int i = 0; i < b->n_points; i++)
-    json_array_append_new(pts, point(x, &b->points[i], b->n_phases));
+    json_array_append_new(pts,
+                          point(x, &b->points[i], b->n_phases, x->fields.mask));
   api__set(br, "points", pts);
   api__set(br, "start", json_integer(b->start));
   json_t *sp = json_array();
@@ -408,7 +468,8 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
       else
         api__set(o, "no_branch", json_string(x->why_none[i]));
     }
-    api__set(o, "orbit", point(x, &s->at, b->n_phases));
+    api__set(o, "orbit",
+             point(x, &s->at, b->n_phases, (1u << N_POINT_FIELDS) - 1));
     json_array_append_new(sp, o);
   }
   api__set(br, "special", sp);

@@ -401,6 +401,34 @@ static void test_batch(void) {
   }
 }
 
+/* EVIDENCE: README "POST /continue": "fields" chooses the per-point fields
+ * (value always comes); a client that asks for the parameter and the
+ * period gets nothing else per point */
+static void test_continue_fields(void) {
+  static const char *const body =
+      "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,"
+      "\"V\":1},\"guess\":{\"durations\":[4.4975,2.7227,3.0513]},"
+      "\"parameter\":\"ur\",\"range\":[0.3,1.5],\"fields\":[\"period\"]}";
+  size_t ep;
+  api_limits lim;
+  api_response r;
+  api_limits_default(&lim);
+  ASSERT_EQ_INT(api_route("POST", "/continue", &ep), 200);
+  api_handle(ep, body, strlen(body), &lim, NULL, &r);
+  ASSERT_EQ_INT(r.status, 200);
+  json_t *j = json_loads(r.body ? r.body : "", 0, NULL);
+  json_t *pts = json_object_get(
+      json_array_get(json_object_get(j, "branches"), 0), "points");
+  ASSERT_TRUE(json_array_size(pts) > 10);
+  for (size_t i = 0; i < json_array_size(pts); i++) {
+    json_t *pt = json_array_get(pts, i);
+    ASSERT_TRUE(json_object_size(pt) == 2 && json_object_get(pt, "value") &&
+                json_object_get(pt, "period"));
+  }
+  json_decref(j);
+  api_response_free(&r);
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     fprintf(stderr, "usage: test_endpoints CASES_DIR\n");
@@ -412,5 +440,6 @@ int main(int argc, char **argv) {
   test_status_table();
   test_streams();
   test_batch();
+  test_continue_fields();
   TEST_DONE();
 }
