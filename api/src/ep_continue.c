@@ -63,12 +63,24 @@ typedef struct cont_x {
   int rc;
   ss_curve curves[SS_MAX_SPECIAL];
   int n_curves;
-  /* with branch_switching: the period-2 family of each period doubling
-   * (index in b.special), or why there is none */
-  ss_branch period2[SS_MAX_SPECIAL];
+  /* with branch_switching: the family each special point of b starts (the
+   * period-2 family of a period doubling, the adjacent family past a
+   * grazing), of_special its index in b.special; why_none says why a
+   * period doubling starts none */
+  ss_branch *period2; /* malloc'd, room for SS_MAX_SPECIAL when used */
   int of_special[SS_MAX_SPECIAL];
   int n_period2;
   char why_none[SS_MAX_SPECIAL][192];
+  /* past each grazing of b: the attractor, and the adjacent sequence */
+  struct {
+    int done;
+    double value;
+    ss_attractor a;
+    int adj_rc;
+    int adj_n; /* the adjacent sequence */
+    ss_mode adj_modes[SS_MAX_PHASES];
+    char adj_why[192];
+  } beyond[SS_MAX_SPECIAL];
 } cont_x;
 
 static int decode_range(const json_t *v, const char *ptr, void *dest,
@@ -297,6 +309,9 @@ int ep_continue_run(void *xp, const api_call *c) {
         ss_curve_free(cv); /* this grazing has no curve: none is listed */
     }
   }
+  if ((x->branch_switching || x->b.n_special) &&
+      !(x->period2 = calloc(SS_MAX_SPECIAL, sizeof *x->period2)))
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
   for (int i = 0; x->branch_switching && x->rc == SS_OK && i < x->b.n_special;
        i++) {
     const ss_special *pd = &x->b.special[i];
@@ -314,6 +329,32 @@ int ep_continue_run(void *xp, const api_call *c) {
       snprintf(x->why_none[i], sizeof x->why_none[i], "%s", d2.text);
     if (rc != SS_OK)
       ss_branch_free(b2);
+  }
+  /* past each grazing: the attractor, and the adjacent family */
+  for (int i = 0; !x->opts.physical && x->rc == SS_OK && i < x->b.n_special;
+       i++) {
+    const ss_special *g = &x->b.special[i];
+    if (g->kind != SS_SPECIAL_GRAZING)
+      continue;
+    ss_diag d2;
+    ss_diag_clear(&d2);
+    x->beyond[i].done =
+        ss_beyond_grazing(&x->ap.p, &x->b, g, x->opts.param,
+                          &x->beyond[i].value, &x->beyond[i].a) == SS_OK;
+    ss_branch adj;
+    int rc = ss_continue_adjacent(&x->ap.p, &x->b, g, &x->opts, &adj, &d2);
+    x->beyond[i].adj_rc = rc;
+    x->beyond[i].adj_n = adj.n_phases;
+    memcpy(x->beyond[i].adj_modes, adj.modes, sizeof adj.modes);
+    snprintf(x->beyond[i].adj_why, sizeof x->beyond[i].adj_why, "%s", d2.text);
+    if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED || rc == SS_ENOMEM)
+      x->rc = rc;
+    if (rc == SS_OK && x->branch_switching && x->n_period2 < SS_MAX_SPECIAL) {
+      x->period2[x->n_period2] = adj;
+      x->of_special[x->n_period2++] = i;
+    } else {
+      ss_branch_free(&adj);
+    }
   }
   if (x->rc == SS_OK)
     return 0;
@@ -396,29 +437,41 @@ static json_t *point(const cont_x *x, const ss_cont_point *p, int n,
   return o;
 }
 
-/* What the motion does just past a grazing that ends the family. */
-static json_t *beyond_json(const cont_x *x, const ss_branch *b,
-                           const ss_special *g, ss_param_id id) {
-  double v;
-  ss_attractor a;
-  if (ss_beyond_grazing(&x->ap.p, b, g, id, &v, &a) != SS_OK)
+/* What the motion does just past the grazing b.special[i] that ends the
+ * family: the attractor simulation reaches, and whether the adjacent
+ * sequence has a family there. */
+static json_t *beyond_json(const cont_x *x, int i) {
+  if (!x->beyond[i].done)
     return json_null();
+  const ss_attractor *a = &x->beyond[i].a;
   json_t *o = json_object();
-  api__set(o, "value", api__real(v));
-  api__set(o, "found", json_boolean(a.found));
-  api__set(o, "perpetual_slip", json_boolean(a.perpetual_slip));
-  api__set(o, "turns_simulated", json_integer(a.turns_run));
-  if (a.found) {
+  api__set(o, "value", api__real(x->beyond[i].value));
+  api__set(o, "found", json_boolean(a->found));
+  api__set(o, "perpetual_slip", json_boolean(a->perpetual_slip));
+  api__set(o, "turns_simulated", json_integer(a->turns_run));
+  if (a->found) {
     json_t *modes = json_array();
-    for (int k = 0; k < a.n_phases && k < SS_MAX_PHASES; k++)
-      json_array_append_new(modes, json_string(ss_mode_name(a.modes[k])));
-    api__set(o, "n_turns", json_integer(a.n_turns));
-    api__set(o, "period", api__real(a.period));
-    api__set(o, "n_phases", json_integer(a.n_phases));
-    api__set(o, "n_overshoot", json_integer(a.n_overshoot));
+    for (int k = 0; k < a->n_phases && k < SS_MAX_PHASES; k++)
+      json_array_append_new(modes, json_string(ss_mode_name(a->modes[k])));
+    api__set(o, "n_turns", json_integer(a->n_turns));
+    api__set(o, "period", api__real(a->period));
+    api__set(o, "n_phases", json_integer(a->n_phases));
+    api__set(o, "n_overshoot", json_integer(a->n_overshoot));
     api__set(o, "modes", modes);
-    api__set(o, "s", api__vec(a.s, 2));
+    api__set(o, "s", api__vec(a->s, 2));
   }
+  json_t *ad = json_object(), *am = json_array();
+  for (int k = 0; k < x->beyond[i].adj_n; k++)
+    json_array_append_new(am,
+                          json_string(ss_mode_name(x->beyond[i].adj_modes[k])));
+  api__set(ad, "modes", am);
+  api__set(ad, "exists", json_boolean(x->beyond[i].adj_rc == SS_OK));
+  for (int k = 0; k < x->n_period2; k++)
+    if (x->of_special[k] == i)
+      api__set(ad, "branch", json_integer(k + 1));
+  if (x->beyond[i].adj_rc != SS_OK)
+    api__set(ad, "reason", json_string(x->beyond[i].adj_why));
+  api__set(o, "adjacent", ad);
   return o;
 }
 
@@ -451,8 +504,8 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
       api__set(o, "phase", json_integer(s->at.min_margin.phase));
       api__set(o, "t", api__real(s->at.min_margin.t / omega_at(x, s->value)));
       api__set(o, "margin_value", api__real(s->at.min_margin.value));
-      if (!x->opts.physical)
-        api__set(o, "beyond", beyond_json(x, b, s, x->opts.param));
+      if (first)
+        api__set(o, "beyond", beyond_json(x, i));
     }
     api__set(o, "multipliers", multipliers(s->at.eig_re, s->at.eig_im));
     api__set(o, "stable_before", json_boolean(s->stable_before));
@@ -541,5 +594,6 @@ void ep_continue_release(void *xp) {
     ss_curve_free(&x->curves[i]);
   for (int i = 0; i < x->n_period2; i++)
     ss_branch_free(&x->period2[i]);
+  free(x->period2);
   free(x);
 }

@@ -949,6 +949,22 @@ SS_API int ss_beyond_grazing(const ss_params *p, const ss_branch *b,
                              const ss_special *g, ss_param_id param,
                              double *value, ss_attractor *a);
 
+/**
+ * The family on the other side of the grazing @a g that ends the family
+ * @a b (continued with @a o from parameters @a p): the adjacent sequence,
+ * a stick of zero length inserted after the phase whose switching margin
+ * reaches zero, solved 1e-4 (relative) past the located value and, when
+ * that orbit is feasible, continued with @a o (its modes in out->modes).
+ * @return SS_OK (@a out is the adjacent family); SS_INFEASIBLE (no
+ *         feasible orbit of the adjacent sequence there: @a d says why, the
+ *         family ends at the grazing; out->modes holds the sequence tried);
+ *         SS_EINVAL (not a grazing of the switching condition that ends
+ *         @a b); or as ss_continue().  Release @a out with ss_branch_free().
+ */
+SS_API int ss_continue_adjacent(const ss_params *p, const ss_branch *b,
+                                const ss_special *g, const ss_cont_opts *o,
+                                ss_branch *out, ss_diag *d);
+
 /** A point of a curve of special points in two parameters. */
 typedef struct ss_curve_point {
   double v1, v2;                   /**< the first and second parameter */

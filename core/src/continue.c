@@ -1327,3 +1327,61 @@ int ss_beyond_grazing(const ss_params *p, const ss_branch *b,
   double s0[2] = {g->at.z0[0], g->at.z0[2]};
   return ss_attractor_from(&m, s0, 5000, 64, a);
 }
+
+/* ---- the adjacent sequence past a grazing ------------------------------ */
+
+int ss_continue_adjacent(const ss_params *p, const ss_branch *b,
+                         const ss_special *g, const ss_cont_opts *o,
+                         ss_branch *out, ss_diag *d) {
+  if (!out)
+    return ss__fail(d, SS_EINVAL, "branch", 0, "no output");
+  memset(out, 0, sizeof *out);
+  if (!p || !b || !g || !o || !ss_param_name(o->param) || o->physical)
+    return ss__fail(d, SS_EINVAL, "opts", 0,
+                    "a NULL argument, or a physical parameter");
+  int k = g->at.min_margin.phase, n = b->n_phases;
+  if (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "switching") ||
+      k < 0 || k >= n || b->modes[k] == SS_MODE_STICK ||
+      n + 1 > SS_MAX_PHASES || b->n_points < 2)
+    return ss__fail(d, SS_EINVAL, "special", 0,
+                    "not a grazing of the switching condition at the end of "
+                    "a slip or overshoot");
+  /* the side past the grazing: away from the family */
+  int at = -1;
+  for (int i = 0; i < b->n_points; i++)
+    if (b->points[i].value == g->value)
+      at = i;
+  if (at < 0 || (at != 0 && at != b->n_points - 1))
+    return ss__fail(d, SS_EINVAL, "special", g->value,
+                    "the grazing does not end the family");
+  double toward = b->points[at == 0 ? 1 : at - 1].value - g->value;
+  ss_orbit guess;
+  memset(&guess, 0, sizeof guess);
+  guess.n_phases = n + 1;
+  for (int j = 0, q = 0; j < n; j++) {
+    guess.modes[q] = b->modes[j];
+    guess.durations[q++] = g->at.durations[j];
+    if (j == k) {
+      guess.modes[q] = SS_MODE_STICK;
+      guess.durations[q++] = 1e-3 * g->at.period;
+    }
+  }
+  out->n_phases = n + 1;
+  memcpy(out->modes, guess.modes, sizeof guess.modes);
+  ss_params q = *p;
+  *param_ref(&q, o->param) = g->value * (1 - (toward > 0 ? 1e-4 : -1e-4));
+  ss_model m;
+  ss_orbit start;
+  int rc = ss_model_init(&m, &q, d);
+  if (rc != SS_OK)
+    return rc;
+  rc = ss_orbit_solve(&m, n + 1, guess.modes, guess.durations, NULL, &start, d);
+  if (rc != SS_OK)
+    return rc == SS_ENOCONV || rc == SS_ESINGULAR
+               ? ss__fail(d, SS_INFEASIBLE, "special", g->value,
+                          "the adjacent sequence has no orbit past the "
+                          "grazing")
+               : rc;
+  rc = ss_continue(&q, &start, o, out, d);
+  return rc;
+}

@@ -490,6 +490,18 @@ static void check_beyond(const ss_params *p, ss_param_id id, double lo,
     ASSERT_TRUE(err < 1e-6);
     /* the last event is the return itself, at the period's end */
     ASSERT_TRUE(ne == a.n_phases || ne == a.n_phases - 1);
+    /* the family ends here: the adjacent sequence (a stick inserted where
+     * the switching margin vanished) has no orbit past the boundary, and
+     * the search finds no orbit of the family's kind there either */
+    ss_branch adj;
+    ss_diag d;
+    ss_diag_clear(&d);
+    ASSERT_EQ_INT(ss_continue_adjacent(p, &b, g, &co, &adj, &d), SS_INFEASIBLE);
+    ASSERT_EQ_INT(adj.n_phases, b.n_phases + 1);
+    ASSERT_EQ_INT((int)adj.modes[g->at.min_margin.phase + 1],
+                  (int)SS_MODE_STICK);
+    ss_branch_free(&adj);
+    ASSERT_EQ_INT(overshoot_at(&q, &start), 0);
   }
   ss_branch_free(&b);
 }
