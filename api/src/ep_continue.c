@@ -301,12 +301,22 @@ int ep_continue_run(void *xp, const api_call *c) {
                                            x->opts.lo, x->opts.hi, &o2, cv, &d)
              : ss_continue_grazing(&x->ap.p, &x->b, g, x->opts.param,
                                    x->opts.lo, x->opts.hi, &o2, cv, &d);
-      if (rc == SS_OK)
+      if (rc == SS_OK) {
         x->n_curves++;
-      else if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED || rc == SS_ENOMEM)
+      } else if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED ||
+                 rc == SS_ENOMEM) {
         x->rc = rc;
-      else
-        ss_curve_free(cv); /* this grazing has no curve: none is listed */
+      } else { /* listed with no points and the reason */
+        ss_curve_free(cv);
+        cv->kind = pd ? SS_SPECIAL_PERIOD_DOUBLING : SS_SPECIAL_GRAZING;
+        cv->p1 = x->opts.param;
+        cv->p2 = o2.param;
+        cv->start = -1;
+        snprintf(cv->end[0], sizeof cv->end[0], "%s",
+                 d.text[0] ? d.text : ss_strerror(rc));
+        x->n_curves++;
+      }
+      ss_diag_clear(&d);
     }
   }
   if ((x->branch_switching || x->b.n_special) &&
@@ -531,7 +541,7 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
     api__set(ends, "down", json_string(b->end[0]));
   if (b->end[1][0])
     api__set(ends, "up", json_string(b->end[1]));
-  char end[400];
+  char end[2 * sizeof b->end[0] + 4];
   snprintf(end, sizeof end, "%s%s%s", b->end[0][0] ? b->end[0] : "",
            b->end[0][0] && b->end[1][0] ? "; " : "",
            b->end[1][0] ? b->end[1] : "");
@@ -571,6 +581,11 @@ int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
       json_array_append_new(cp, q);
     }
     api__set(co, "points", cp);
+    if (cv->n_points == 0) { /* no curve through this special point */
+      api__set(co, "error", json_string(cv->end[0]));
+      json_array_append_new(curves, co);
+      continue;
+    }
     api__set(co, "start", json_integer(cv->start));
     json_t *ce = json_object();
     if (cv->end[0][0])

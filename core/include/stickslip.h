@@ -828,8 +828,10 @@ typedef struct ss_special {
    *  "overshoot_above_V", "stick_below_ur", "stick_above_minus_ur",
    *  "transversality"), its phase and time in at.min_margin */
   char margin[24];
-  int stable_before, stable_after; /**< the stability verdict either side */
-  char detail[256];                /**< a sentence */
+  /** The stability verdict below and above the value (in increasing
+   *  parameter) */
+  int stable_before, stable_after;
+  char detail[400]; /**< a sentence */
 } ss_special;
 
 /** The most special points one family reports. */
@@ -867,7 +869,7 @@ typedef struct ss_branch {
   ss_special special[SS_MAX_SPECIAL];
   /** Why the family ended going down ([0]) and up ([1]) from the start;
    *  "" for a direction not followed. */
-  char end[2][192];
+  char end[2][320];
 } ss_branch;
 
 /**
@@ -985,7 +987,7 @@ typedef struct ss_curve {
   int n_points;
   ss_curve_point *points; /**< malloc'd, in order along the curve */
   int start;              /**< the index of the grazing it started from */
-  char end[2][192];       /**< why it ended, p2 going down and up */
+  char end[2][320];       /**< why it ended, p2 going down and up */
 } ss_curve;
 
 /**

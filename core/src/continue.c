@@ -118,8 +118,9 @@ typedef struct cont {
   double t0, budget;
   int (*cancelled)(void *);
   void *cancel_cls;
-  int stop; /* SS_ELIMIT_TIME or SS_ECANCELED once asked to stop */
-  curve cv; /* the duration equations in (tau, q) */
+  int stop;         /* SS_ELIMIT_TIME or SS_ECANCELED once asked to stop */
+  curve cv;         /* the duration equations in (tau, q) */
+  int total_points; /* max_points, as asked */
 } cont;
 
 static double value_of(const cont *c, const double *y) {
@@ -137,6 +138,14 @@ static int model_at(const cont *c, double v, ss_model *m) {
     *param_ref(&p, c->id) = v;
   }
   return ss_model_init(m, &p, NULL);
+}
+
+/* The scale of a parameter's unknown: its range's width, but no more than
+ * ten times its value, so that a very wide range does not make the first
+ * step or the difference step leave the parameter's domain. */
+static double scale_of(double lo, double hi, double v) {
+  double w = hi - lo;
+  return v != 0 && w > 10 * fabs(v) ? 10 * fabs(v) : w;
 }
 
 /* The name of the continued parameter. */
@@ -409,7 +418,7 @@ static void add_special(ss_branch *b, const ss_special *s) {
 static void locate(cont *c, const double *ya, const double *yb,
                    const double *dir, int which, double fa, double fb,
                    const ss_cont_point *pa, const ss_cont_point *pb,
-                   ss_special_kind kind, ss_branch *b) {
+                   ss_special_kind kind, int saddle_node, ss_branch *b) {
   int np = c->n + 1;
   double lo = 0, hi = 1, flo = fa, fhi = fb, y[NMAX], best[NMAX];
   double res = 0;
@@ -466,16 +475,22 @@ static void locate(cont *c, const double *ya, const double *yb,
   s.at = pbest;
   s.value = pbest.value;
   s.precision = fabs(vhi - vlo) / fmax(fabs(s.value), DBL_MIN);
-  s.stable_before = pa->stable;
-  s.stable_after = pb->stable;
+  /* the verdicts below and above the value (at a fold, along the family) */
+  const ss_cont_point *below = pa->value <= pb->value ? pa : pb,
+                      *above = below == pa ? pb : pa;
+  s.stable_before = below->stable;
+  s.stable_after = above->stable;
   static const char *const WHAT[] = {
       "", "the family turns back", "a real multiplier crosses +1",
       "a real multiplier crosses -1", "a complex pair crosses the unit circle"};
-  snprintf(s.detail, sizeof s.detail, "%.40s at %.4s = %.15g%.40s%.30s",
+  snprintf(s.detail, sizeof s.detail, "%.40s at %.4s = %.15g%.60s%.40s%.30s",
            WHAT[kind], cont_name(c), s.value,
-           pa->stable != pb->stable
-               ? (pa->stable ? "; stable before, unstable after"
-                             : "; unstable before, stable after")
+           kind == SS_SPECIAL_FOLD && saddle_node
+               ? ", a saddle-node (a real multiplier crosses +1)"
+               : "",
+           s.stable_before != s.stable_after
+               ? (s.stable_before ? "; stable below, unstable above"
+                                  : "; unstable below, stable above")
                : "",
            ok ? "" : " (not located to 1e-10)");
   (void)best;
@@ -522,7 +537,7 @@ static void locate_grazing(cont *c, const double *ya, const double *yb,
   s.stable_before = s.stable_after = plo.stable;
   snprintf(s.detail, sizeof s.detail,
            "the %.24s margin reaches zero in phase %d at %.4s = %.15g%.30s; "
-           "beyond: %.90s",
+           "beyond: %.200s",
            s.margin, plo.min_margin.phase, cont_name(c), s.value,
            ok ? "" : " (not located to 1e-10)", why);
   add_special(b, &s);
@@ -634,7 +649,7 @@ static int follow(cont *c, const double *y0, int dir, double step0,
                      &last);
       if ((rc = push(v, nv, cap, &last)) != SS_OK)
         return rc;
-      snprintf(end, end_n, "grazing at %s = %.15g: %.120s", cont_name(c),
+      snprintf(end, end_n, "grazing at %s = %.15g: %.200s", cont_name(c),
                last.value, why.text);
       return SS_OK;
     }
@@ -656,11 +671,18 @@ static int follow(cont *c, const double *y0, int dir, double step0,
     static const ss_special_kind KIND[3] = {SS_SPECIAL_SADDLE_NODE,
                                             SS_SPECIAL_PERIOD_DOUBLING,
                                             SS_SPECIAL_NEIMARK_SACKER};
+    /* a fold of the family is a multiplier through +1 of its map: one
+     * special point, a fold that says it is a saddle-node */
+    int fold = (t[n] < 0) != (tn[n] < 0) && !at_bound, sn = 0;
     for (int k = 0; k < 3; k++)
-      if (!isnan(pa[k]) && !isnan(pb[k]) && (pa[k] < 0) != (pb[k] < 0))
-        locate(c, y, yn, t, k, pa[k], pb[k], &prev, &pt, KIND[k], b);
-    if ((t[n] < 0) != (tn[n] < 0) && !at_bound)
-      locate(c, y, yn, t, 3, t[n], tn[n], &prev, &pt, SS_SPECIAL_FOLD, b);
+      if (!isnan(pa[k]) && !isnan(pb[k]) && (pa[k] < 0) != (pb[k] < 0)) {
+        if (k == 0 && fold)
+          sn = 1;
+        else
+          locate(c, y, yn, t, k, pa[k], pb[k], &prev, &pt, KIND[k], 0, b);
+      }
+    if (fold)
+      locate(c, y, yn, t, 3, t[n], tn[n], &prev, &pt, SS_SPECIAL_FOLD, sn, b);
     if ((rc = push(v, nv, cap, &pt)) != SS_OK)
       return rc;
     memcpy(y, yn, sizeof y);
@@ -676,7 +698,7 @@ static int follow(cont *c, const double *y0, int dir, double step0,
     else if (iters >= 6)
       ds *= 0.6;
   }
-  snprintf(end, end_n, "max_points (%d) reached", max_points);
+  snprintf(end, end_n, "max_points (%d) reached", c->total_points);
   return SS_OK;
 }
 
@@ -720,7 +742,7 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
   c.modes = start->modes;
   c.lo = opts->lo;
   c.hi = opts->hi;
-  c.S = opts->hi - opts->lo;
+  c.S = scale_of(opts->lo, opts->hi, v0);
   c.t0 = ss__now();
   c.budget = opts->max_seconds;
   c.cancelled = opts->cancelled;
@@ -755,12 +777,22 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
     budget_up = 0;
   }
   int rc_down = SS_OK, rc_up = SS_OK;
+  c.total_points = max_points;
   if (budget_down > 0)
     rc_down = follow(&c, y0, -1, step, budget_down, &down, &nd, &cd, b,
                      b->end[0], sizeof b->end[0]);
+  else if (opts->direction == 0)
+    snprintf(b->end[0], sizeof b->end[0], "max_points (%d) reached",
+             max_points);
+  /* going up gets what going down left of the budget */
+  if (opts->direction == 0)
+    budget_up = max_points - 1 - nd;
   if (budget_up > 0 && rc_down != SS_ENOMEM)
     rc_up = follow(&c, y0, +1, step, budget_up, &up, &nu, &cu, b, b->end[1],
                    sizeof b->end[1]);
+  else if (opts->direction != -1)
+    snprintf(b->end[1], sizeof b->end[1], "max_points (%d) reached",
+             max_points);
   b->points = malloc((size_t)(nd + nu + 1) * sizeof *b->points);
   if (!b->points) {
     free(down);
@@ -793,6 +825,8 @@ typedef struct gcont {
   int n, k; /* phases; a grazing is at the end of phase k */
   ss_mode modes[SS_MAX_PHASES];
   double lo1, S1, lo2, S2, T;
+  double q1max, q2max; /* the ranges' ends in the scaled unknowns */
+  int total_points;    /* max_points, as asked */
 } gcont;
 
 static void gc_params(const gcont *g, const double *y, ss_params *p) {
@@ -977,11 +1011,11 @@ static int gc_follow(const gcont *g, cont *stop, const double *y0, int dir,
     /* the ranges: the last point on the bound of the second parameter; the
      * first parameter leaving its range ends the curve where it left */
     int at_bound = 0;
-    if (yn[iq2] > 1 || yn[iq2] < 0) {
+    if (yn[iq2] > g->q2max || yn[iq2] < 0) {
       double a[NMAX] = {0}, base[NMAX];
       memcpy(base, yn, sizeof base);
       a[iq2] = 1;
-      base[iq2] = yn[iq2] > 1 ? 1 : 0;
+      base[iq2] = yn[iq2] > g->q2max ? g->q2max : 0;
       memcpy(yn, y, sizeof yn);
       yn[iq2] = base[iq2];
       if (correct(&cv, yn, a, base, &iters, &res) != SS_OK ||
@@ -995,11 +1029,25 @@ static int gc_follow(const gcont *g, cont *stop, const double *y0, int dir,
       yn[iq2] = base[iq2];
       at_bound = 1;
     }
-    if (yn[iq1] > 1 || yn[iq1] < 0) {
-      snprintf(end, end_n, "%s left its range [%.15g, %.15g] (at %.15g)",
-               ss_param_name(g->id1), g->lo1, g->lo1 + g->S1,
-               g->lo1 + g->S1 * yn[iq1]);
-      return SS_OK;
+    if (yn[iq1] > g->q1max || yn[iq1] < 0) {
+      /* the first parameter leaves its range: the last point on its
+       * bound, and the curve ends there */
+      double a[NMAX] = {0}, base[NMAX];
+      memcpy(base, yn, sizeof base);
+      a[iq1] = 1;
+      base[iq1] = yn[iq1] > g->q1max ? g->q1max : 0;
+      memcpy(yn, y, sizeof yn);
+      yn[iq1] = base[iq1];
+      if (correct(&cv, yn, a, base, &iters, &res) != SS_OK) {
+        if ((ds *= 0.5) < ds_min) {
+          snprintf(end, end_n, "no point of the curve on %s's bound",
+                   ss_param_name(g->id1));
+          return SS_OK;
+        }
+        continue;
+      }
+      yn[iq1] = base[iq1];
+      at_bound = 2;
     }
     int side = g->kind == SS_SPECIAL_GRAZING ? feasible_side(g, yn)
                                              : gc_feasible(g, yn);
@@ -1032,7 +1080,8 @@ static int gc_follow(const gcont *g, cont *stop, const double *y0, int dir,
     memcpy(t, tn, sizeof t);
     if (at_bound) {
       snprintf(end, end_n, "the end of the range, %s = %.15g",
-               ss_param_name(g->id2), pt.v2);
+               ss_param_name(at_bound == 2 ? g->id1 : g->id2),
+               at_bound == 2 ? pt.v1 : pt.v2);
       return SS_OK;
     }
     if (iters <= 3)
@@ -1040,7 +1089,7 @@ static int gc_follow(const gcont *g, cont *stop, const double *y0, int dir,
     else if (iters >= 6)
       ds *= 0.6;
   }
-  snprintf(end, end_n, "max_points (%d) reached", max_points);
+  snprintf(end, end_n, "max_points (%d) reached", g->total_points);
   return SS_OK;
 }
 
@@ -1089,9 +1138,11 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   gc.k = kind == SS_SPECIAL_GRAZING ? g->at.min_margin.phase : 0;
   memcpy(gc.modes, b->modes, sizeof gc.modes);
   gc.lo1 = lo1;
-  gc.S1 = hi1 - lo1;
+  gc.S1 = scale_of(lo1, hi1, g->value);
+  gc.q1max = (hi1 - lo1) / gc.S1;
   gc.lo2 = o2->lo;
-  gc.S2 = o2->hi - o2->lo;
+  gc.S2 = scale_of(o2->lo, o2->hi, *param_ref(&gc.p, o2->param));
+  gc.q2max = (o2->hi - o2->lo) / gc.S2;
   gc.T = g->at.period;
   double v2 = *param_ref(&gc.p, gc.id2);
   if (!(v2 >= o2->lo && v2 <= o2->hi))
@@ -1126,10 +1177,12 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   ss_curve_point *down = NULL, *up = NULL, first;
   int nd = 0, cd = 0, nu = 0, cu = 0;
   gc_point(&gc, y0, side, &first);
-  int bd = (max_points - 1) / 2, bu = max_points - 1 - bd;
+  int bd = (max_points - 1) / 2, bu;
+  gc.total_points = max_points;
   int rc_d = bd > 0 ? gc_follow(&gc, &stop, y0, -1, step, bd, &down, &nd, &cd,
                                 cv->end[0], sizeof cv->end[0])
                     : SS_OK;
+  bu = max_points - 1 - nd; /* what going down left of the budget */
   int rc_u = bu > 0 && rc_d != SS_ENOMEM
                  ? gc_follow(&gc, &stop, y0, +1, step, bu, &up, &nu, &cu,
                              cv->end[1], sizeof cv->end[1])
