@@ -292,8 +292,7 @@ int ep_continue_run(void *xp, const api_call *c) {
     int pd = x->follow.special == 1;
     for (int i = 0; i < x->b.n_special && x->rc == SS_OK; i++) {
       const ss_special *g = &x->b.special[i];
-      if (pd ? g->kind != SS_SPECIAL_PERIOD_DOUBLING
-             : g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "switching"))
+      if (g->kind != (pd ? SS_SPECIAL_PERIOD_DOUBLING : SS_SPECIAL_GRAZING))
         continue;
       ss_curve *cv = &x->curves[x->n_curves];
       int rc =

@@ -28,7 +28,7 @@
 #include "internal.h"
 #include "linalg.h"
 
-#define NMAX (SS_MAX_PHASES + 2)
+#define NMAX (SS_MAX_PHASES + 3)
 
 /* A curve F(y) = 0 with F from R^(ne + 1) to R^ne: f fills F and, when J
  * is not NULL, dF/dy (ne x (ne + 1), row-major). */
@@ -827,12 +827,18 @@ typedef struct gcont {
   double lo1, S1, lo2, S2, T;
   double q1max, q2max; /* the ranges' ends in the scaled unknowns */
   int total_points;    /* max_points, as asked */
+  /* an interior grazing: the margin (its index in INTERIOR) has a zero
+   * maximum inside phase k, at local time t* = T y[n], one more unknown */
+  int interior, margin;
 } gcont;
+
+/* The unknowns of a curve: durations, t* (interior grazing), q1, q2. */
+static int gc_q1(const gcont *g) { return g->n + g->interior; }
 
 static void gc_params(const gcont *g, const double *y, ss_params *p) {
   *p = g->p;
-  *param_ref(p, g->id1) = g->lo1 + g->S1 * y[g->n];
-  *param_ref(p, g->id2) = g->lo2 + g->S2 * y[g->n + 1];
+  *param_ref(p, g->id1) = g->lo1 + g->S1 * y[gc_q1(g)];
+  *param_ref(p, g->id2) = g->lo2 + g->S2 * y[gc_q1(g) + 1];
 }
 
 /* The switching margin at the end of phase k from the start z0, by the
@@ -851,7 +857,28 @@ static double switch_margin(const ss_model *m, const gcont *g,
   return want == SS_MODE_STICK ? ur - f : f - ur;        /* (3.4) */
 }
 
-/* The duration equations and the margin (n + 1 values) at y. */
+/* The margins that can have an interior zero maximum, by name, and their
+ * value at the state x (>= 0 when the constraint holds). */
+static const char *const INTERIOR[] = {"slip_below_V", "overshoot_above_V",
+                                       "stick_below_ur",
+                                       "stick_above_minus_ur"};
+
+static double interior_margin(const ss_model *m, int which, const double x[4]) {
+  double f = ss_stick_force(m, x);
+  switch (which) {
+  case 0:
+    return m->p.V - x[3];
+  case 1:
+    return x[3] - m->p.V;
+  case 2:
+    return m->p.ur - f;
+  default:
+    return m->p.ur + f;
+  }
+}
+
+/* The duration equations and the grazing's equations at y: the margin (n
+ * + 1 values), or an interior margin and its slope (n + 2). */
 static int gc_values(const gcont *g, const double *y, double *F) {
   double tau[SS_MAX_PHASES], z0[4];
   ss_params p;
@@ -865,6 +892,24 @@ static int gc_values(const gcont *g, const double *y, double *F) {
   int rc = ss_orbit_equations(&m, g->n, g->modes, tau, z0, F, NULL);
   if (rc != SS_OK)
     return rc;
+  if (g->kind == SS_SPECIAL_GRAZING && g->interior) {
+    /* the margin and its slope at t*, by the closed form of phase k (the
+     * slope by central differences in t) */
+    double ts = g->T * y[g->n], h = 1e-6 * g->T, x[4], v[3];
+    if (!(ts > 0 && ts < tau[g->k]))
+      return SS_EDOMAIN;
+    ss_z_to_x(&m, z0, x);
+    for (int j = 0; j < g->k; j++)
+      ss_flow(&m, g->modes[j], tau[j], x, x);
+    for (int s = 0; s < 3; s++) {
+      double xt[4];
+      ss_flow(&m, g->modes[g->k], ts + (s - 1) * h, x, xt);
+      v[s] = interior_margin(&m, g->margin, xt);
+    }
+    F[g->n] = v[1];
+    F[g->n + 1] = (v[2] - v[0]) / (2 * h) * g->T;
+    return SS_OK;
+  }
   if (g->kind == SS_SPECIAL_GRAZING) {
     F[g->n] = switch_margin(&m, g, tau, z0);
     return SS_OK;
@@ -903,7 +948,7 @@ static int gc_feasible(const gcont *g, const double *y) {
  * are exact; the Jacobian only steers Newton). */
 static int gc_f(const void *ctx, const double *y, double *F, double *J) {
   const gcont *g = ctx;
-  int ne = g->n + 1, nu = ne + 1;
+  int ne = g->n + 1 + g->interior, nu = ne + 1;
   int rc = gc_values(g, y, F);
   if (rc != SS_OK || !J)
     return rc;
@@ -977,8 +1022,8 @@ static int gc_push(ss_curve_point **v, int *n, int *cap,
 static int gc_follow(const gcont *g, cont *stop, const double *y0, int dir,
                      double step, int max_points, ss_curve_point **v, int *nv,
                      int *cap, char *end, size_t end_n) {
-  int nu = g->n + 2, iq1 = g->n, iq2 = g->n + 1, iters;
-  curve cv = {gc_f, g, g->n + 1};
+  int nu = g->n + 2 + g->interior, iq1 = gc_q1(g), iq2 = iq1 + 1, iters;
+  curve cv = {gc_f, g, g->n + 1 + g->interior};
   double y[NMAX], t[NMAX], e[NMAX] = {0}, res;
   memcpy(y, y0, sizeof y[0] * (size_t)nu);
   e[iq2] = dir;
@@ -1110,13 +1155,20 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   memset(cv, 0, sizeof *cv);
   if (!p || !b || !g || !o2)
     return ss__fail(d, SS_EINVAL, "opts", 0, "a NULL argument");
+  int interior = -1;
+  for (int i = 0; i < 4; i++)
+    if (!strcmp(g->margin, INTERIOR[i]))
+      interior = i;
   if (kind == SS_SPECIAL_GRAZING &&
-      (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "switching") ||
-       g->at.min_margin.phase < 0 ||
-       b->modes[g->at.min_margin.phase] == SS_MODE_STICK))
+      (g->kind != SS_SPECIAL_GRAZING || g->at.min_margin.phase < 0 ||
+       g->at.min_margin.phase >= b->n_phases ||
+       (interior < 0 && (strcmp(g->margin, "switching") ||
+                         b->modes[g->at.min_margin.phase] == SS_MODE_STICK)) ||
+       (interior >= 0 && !(g->at.min_margin.t > 0))))
     return ss__fail(d, SS_EINVAL, "special", 0,
                     "only a grazing of the switching condition at the end of "
-                    "a slip or overshoot can be followed");
+                    "a slip or overshoot, or of a margin's maximum inside a "
+                    "phase, can be followed");
   if (kind == SS_SPECIAL_PERIOD_DOUBLING &&
       g->kind != SS_SPECIAL_PERIOD_DOUBLING)
     return ss__fail(d, SS_EINVAL, "special", 0, "not a period doubling");
@@ -1136,6 +1188,8 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   gc.id2 = o2->param;
   gc.n = b->n_phases;
   gc.k = kind == SS_SPECIAL_GRAZING ? g->at.min_margin.phase : 0;
+  gc.interior = kind == SS_SPECIAL_GRAZING && interior >= 0;
+  gc.margin = interior;
   memcpy(gc.modes, b->modes, sizeof gc.modes);
   gc.lo1 = lo1;
   gc.S1 = scale_of(lo1, hi1, g->value);
@@ -1152,15 +1206,18 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   double y0[NMAX];
   for (int k = 0; k < gc.n; k++)
     y0[k] = g->at.durations[k] / gc.T;
-  y0[gc.n] = (g->value - lo1) / gc.S1;
-  y0[gc.n + 1] = (v2 - gc.lo2) / gc.S2;
+  int iq1 = gc_q1(&gc);
+  if (gc.interior)
+    y0[gc.n] = g->at.min_margin.t / gc.T;
+  y0[iq1] = (g->value - lo1) / gc.S1;
+  y0[iq1 + 1] = (v2 - gc.lo2) / gc.S2;
   /* onto the curve exactly (the located grazing is within 1e-10) */
-  curve c = {gc_f, &gc, gc.n + 1};
+  curve c = {gc_f, &gc, gc.n + 1 + gc.interior};
   double a[NMAX] = {0}, base[NMAX];
   int iters;
   double res;
   memcpy(base, y0, sizeof base);
-  a[gc.n + 1] = 1;
+  a[iq1 + 1] = 1;
   int rc = correct(&c, y0, a, base, &iters, &res);
   if (rc != SS_OK)
     return ss__fail(d, SS_ENOCONV, "special", g->value,
@@ -1392,13 +1449,20 @@ int ss_continue_adjacent(const ss_params *p, const ss_branch *b,
   if (!p || !b || !g || !o || !ss_param_name(o->param) || o->physical)
     return ss__fail(d, SS_EINVAL, "opts", 0,
                     "a NULL argument, or a physical parameter");
-  int k = g->at.min_margin.phase, n = b->n_phases;
-  if (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "switching") ||
-      k < 0 || k >= n || b->modes[k] == SS_MODE_STICK ||
-      n + 1 > SS_MAX_PHASES || b->n_points < 2)
+  int k = g->at.min_margin.phase, n = b->n_phases, interior = -1;
+  for (int i = 0; i < 4; i++)
+    if (!strcmp(g->margin, INTERIOR[i]))
+      interior = i;
+  if (g->kind != SS_SPECIAL_GRAZING || k < 0 || k >= n || b->n_points < 2 ||
+      n + (interior >= 0 ? 2 : 1) > SS_MAX_PHASES ||
+      (interior < 0 &&
+       (strcmp(g->margin, "switching") || b->modes[k] == SS_MODE_STICK)) ||
+      (interior >= 0 &&
+       !(g->at.min_margin.t > 0 && g->at.min_margin.t < g->at.durations[k])))
     return ss__fail(d, SS_EINVAL, "special", 0,
                     "not a grazing of the switching condition at the end of "
-                    "a slip or overshoot");
+                    "a slip or overshoot, or of a margin's maximum inside a "
+                    "phase");
   /* the side past the grazing: away from the family */
   int at = -1;
   for (int i = 0; i < b->n_points; i++)
@@ -1408,33 +1472,50 @@ int ss_continue_adjacent(const ss_params *p, const ss_branch *b,
     return ss__fail(d, SS_EINVAL, "special", g->value,
                     "the grazing does not end the family");
   double toward = b->points[at == 0 ? 1 : at - 1].value - g->value;
+  /* the adjacent sequence: a short stick after the phase that ends on its
+   * switching surface; or, for a maximum inside phase k, that phase split
+   * there by a short phase of the mode the margin's zero would start */
+  static const ss_mode SPLIT[4] = {SS_MODE_STICK, SS_MODE_STICK, SS_MODE_SLIP,
+                                   SS_MODE_OVERSHOOT};
   ss_orbit guess;
   memset(&guess, 0, sizeof guess);
-  guess.n_phases = n + 1;
-  for (int j = 0, q = 0; j < n; j++) {
+  int q = 0;
+  for (int j = 0; j < n; j++) {
+    double tj = g->at.durations[j];
+    if (j == k && interior >= 0) {
+      guess.modes[q] = b->modes[j];
+      guess.durations[q++] = g->at.min_margin.t;
+      guess.modes[q] = SPLIT[interior];
+      guess.durations[q++] = 1e-3 * g->at.period;
+      guess.modes[q] = b->modes[j];
+      guess.durations[q++] = tj - g->at.min_margin.t;
+      continue;
+    }
     guess.modes[q] = b->modes[j];
-    guess.durations[q++] = g->at.durations[j];
+    guess.durations[q++] = tj;
     if (j == k) {
       guess.modes[q] = SS_MODE_STICK;
       guess.durations[q++] = 1e-3 * g->at.period;
     }
   }
-  out->n_phases = n + 1;
+  guess.n_phases = q;
+  out->n_phases = guess.n_phases;
   memcpy(out->modes, guess.modes, sizeof guess.modes);
-  ss_params q = *p;
-  *param_ref(&q, o->param) = g->value * (1 - (toward > 0 ? 1e-4 : -1e-4));
+  ss_params past = *p;
+  *param_ref(&past, o->param) = g->value * (1 - (toward > 0 ? 1e-4 : -1e-4));
   ss_model m;
   ss_orbit start;
-  int rc = ss_model_init(&m, &q, d);
+  int rc = ss_model_init(&m, &past, d);
   if (rc != SS_OK)
     return rc;
-  rc = ss_orbit_solve(&m, n + 1, guess.modes, guess.durations, NULL, &start, d);
+  rc = ss_orbit_solve(&m, guess.n_phases, guess.modes, guess.durations, NULL,
+                      &start, d);
   if (rc != SS_OK)
     return rc == SS_ENOCONV || rc == SS_ESINGULAR
                ? ss__fail(d, SS_INFEASIBLE, "special", g->value,
                           "the adjacent sequence has no orbit past the "
                           "grazing")
                : rc;
-  rc = ss_continue(&q, &start, o, out, d);
+  rc = ss_continue(&past, &start, o, out, d);
   return rc;
 }

@@ -768,6 +768,124 @@ static void test_physical(void) {
   ss_branch_free(&b);
 }
 
+/* The largest chi (x2 - x1) - ur inside phase k of the orbit (modes, tau,
+ * x0) by the rk8pd reference: each phase integrated from its start, the
+ * maximum by golden-section search on the time in phase k. */
+static double ref_interior_max(const ss_params *p, const ss_mode *modes,
+                               const double *tau, const double x0[4], int k) {
+  ref_params rp = {p->chi, p->eta, p->us, p->ur, p->V};
+  ref_opts ro = {gsl_odeiv2_step_rk8pd, 1e-13, 1e-13, 0, 1e-13};
+  double x[4];
+  memcpy(x, x0, sizeof x);
+  for (int j = 0; j < k; j++) {
+    ref_flow(&rp, (int)modes[j], tau[j], x, &ro);
+    if (modes[j] == SS_MODE_STICK ||
+        (j + 1 < k + 1 && modes[j + 1] == SS_MODE_STICK))
+      x[3] = p->V; /* a stick starts at the belt's speed */
+  }
+  double a = 0, b = tau[k], g = (sqrt(5) - 1) / 2, best = -INFINITY;
+  for (int it = 0; it < 80; it++) {
+    double t1 = b - g * (b - a), t2 = a + g * (b - a), f[2];
+    double ts[2] = {t1, t2};
+    for (int s = 0; s < 2; s++) {
+      double xs[4];
+      memcpy(xs, x, sizeof xs);
+      ref_flow(&rp, (int)modes[k], ts[s], xs, &ro);
+      f[s] = p->chi * (xs[1] - xs[0]) - p->ur;
+    }
+    if (f[0] > f[1])
+      b = t2;
+    else
+      a = t1;
+    best = fmax(best, fmax(f[0], f[1]));
+  }
+  return best;
+}
+
+/* EVIDENCE: README "Families": a grazing inside a phase (the stick force
+ * touching ur in the middle of a stick) followed in a second parameter:
+ * at every point the orbit exists on one side only in the first, and the
+ * rk8pd reference puts the stick force's maximum on ur */
+static void test_interior_grazing_curve(void) {
+  ss_params p = PAPER;
+  p.ur = 12 * p.us;
+  p.chi = 0.5;
+  ss_model m;
+  ss_orbit_opts oo;
+  ss_orbit found[16], *start = NULL;
+  int n = 0;
+  memset(&oo, 0, sizeof oo);
+  oo.kinds = SS_ORBIT_STICKSLIP;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, found, 16, &n, NULL, NULL), SS_OK);
+  for (int i = 0; i < n; i++)
+    if (fabs(found[i].period - 12.569) < 0.01)
+      start = &found[i];
+  ASSERT_TRUE(start != NULL);
+  if (!start)
+    return;
+  ss_cont_opts co, o2;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_CHI;
+  co.lo = 0.01;
+  co.hi = 0.99;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&p, start, &co, &b, NULL), SS_OK);
+  memset(&o2, 0, sizeof o2);
+  o2.param = SS_PARAM_UR;
+  o2.lo = 0.3;
+  o2.hi = 2;
+  o2.max_points = 300;
+  int curves = 0;
+  for (int i = 0; i < b.n_special; i++) {
+    const ss_special *g = &b.special[i];
+    if (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "stick_below_ur"))
+      continue;
+    ss_curve cv;
+    ASSERT_EQ_INT(ss_continue_grazing(&p, &b, g, SS_PARAM_CHI, 0.01, 0.99, &o2,
+                                      &cv, NULL),
+                  SS_OK);
+    ASSERT_TRUE(cv.n_points > 20);
+    int sides = 0;
+    double worst = 0;
+    for (int k = 0; k < cv.n_points; k++) {
+      const ss_curve_point *q = &cv.points[k];
+      ss_params at = p;
+      at.chi = q->v1;
+      at.ur = q->v2;
+      int ok[2];
+      for (int s = 0; s < 2; s++) {
+        ss_params ps = at;
+        ss_orbit o;
+        ps.chi = q->v1 * (1 + (s ? 1e-7 : -1e-7));
+        ASSERT_EQ_INT(ss_model_init(&m, &ps, NULL), SS_OK);
+        ok[s] = ss_orbit_solve(&m, b.n_phases, b.modes, q->durations, NULL, &o,
+                               NULL) == SS_OK;
+      }
+      sides += ok[0] != ok[1] && ok[1] == (q->feasible_side > 0);
+      if (k % 10 == 0) {
+        double x0[4];
+        ASSERT_EQ_INT(ss_model_init(&m, &at, NULL), SS_OK);
+        ss_z_to_x(&m, q->z0, x0);
+        worst = fmax(worst, fabs(ref_interior_max(&at, b.modes, q->durations,
+                                                  x0, g->at.min_margin.phase)));
+      }
+    }
+    printf("the stick grazing at chi = %.9g followed in ur: %d points from "
+           "(chi, ur) = (%.6g, %.6g) to (%.6g, %.6g); one side only at %d; "
+           "rk8pd maximum of the stick force within %.2g of ur\n",
+           g->value, cv.n_points, cv.points[0].v1, cv.points[0].v2,
+           cv.points[cv.n_points - 1].v1, cv.points[cv.n_points - 1].v2, sides,
+           worst);
+    ASSERT_EQ_INT(sides, cv.n_points);
+    ASSERT_TRUE(worst < 1e-8);
+    ss_curve_free(&cv);
+    curves++;
+  }
+  ASSERT_EQ_INT(curves, 2);
+  ss_branch_free(&b);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_ur_family();
@@ -780,5 +898,6 @@ int main(void) {
   test_fold();
   test_period_doubling_curve();
   test_physical();
+  test_interior_grazing_curve();
   TEST_DONE();
 }
