@@ -135,8 +135,8 @@ static int number(const api_field *f, const json_t *v, const char *p,
     return api__fail(e, API_P_INVALID_VALUE, p, "%s must be finite", p);
   if (f->lo < f->hi && !(*out >= f->lo && *out <= f->hi))
     return api__fail(e, API_P_INVALID_VALUE, p,
-                     "%s must be between %g and %g (got %g)", p, f->lo, f->hi,
-                     *out);
+                     "%s must be between %g and %g (got %.15g)", p, f->lo,
+                     f->hi, *out);
   return 0;
 }
 
@@ -145,17 +145,18 @@ static int count(const api_field *f, const json_t *v, const char *p,
   if (!json_is_integer(v))
     return api__fail(c->e, API_P_INVALID_TYPE, p, "%s must be an integer", p);
   *out = (long long)json_integer_value(v);
-  if (*out < (long long)f->lo || *out > (long long)f->hi)
-    return api__fail(c->e, API_P_INVALID_VALUE, p,
-                     "%s must be between %lld and %lld (got %lld)", p,
-                     (long long)f->lo, (long long)f->hi, *out);
-  if (f->limit) {
+  /* a value over a limit names the limit, however far over it is */
+  if (f->limit && *out >= (long long)f->lo) {
     double lim = limit_of(c->lim, f->limit);
     if ((double)*out > lim)
       return api__limit(c->e, f->limit, lim, p,
                         "%s = %lld is over the limit %s = %.0f", p, *out,
                         f->limit, lim);
   }
+  if (*out < (long long)f->lo || *out > (long long)f->hi)
+    return api__fail(c->e, API_P_INVALID_VALUE, p,
+                     "%s must be between %lld and %lld (got %lld)", p,
+                     (long long)f->lo, (long long)f->hi, *out);
   return 0;
 }
 
