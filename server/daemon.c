@@ -58,6 +58,7 @@ typedef struct conn {
 struct srv_daemon {
   struct MHD_Daemon *mhd;
   srv_config cfg;
+  int port; /* the port it listens on */
   srv_metrics *metrics;
   srv_pool *pool;
   char transport[48];
@@ -1115,7 +1116,7 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
   }
   if (pthread_create(&d->monitor, NULL, monitor, d) == 0)
     d->monitor_running = 1;
-  int port = bound_port(d->mhd, cfg->port);
+  int port = d->port = bound_port(d->mhd, cfg->port);
   if (strchr(cfg->bind, ':'))
     fprintf(stderr, "stickslipd listening on http://[%s]:%d\n", cfg->bind,
             port);
@@ -1131,6 +1132,8 @@ int srv_add_connection(struct srv_daemon *d, int fd,
              ? 0
              : -1;
 }
+
+int srv_port(struct srv_daemon *d) { return d->port; }
 
 unsigned long srv_connections_started(struct srv_daemon *d) {
   return atomic_load(&d->conns_started);

@@ -134,6 +134,9 @@ int srv_add_connection(struct srv_daemon *d, int fd,
  * counts once the daemon's thread has taken it up. */
 unsigned long srv_connections_started(struct srv_daemon *d);
 
+/* The port the daemon listens on (the one the system chose for port 0). */
+int srv_port(struct srv_daemon *d);
+
 /* What the monitor knows of the connection on socket @a fd: 0 with whether
  * its request is still being received, whether the monitor has shut it
  * down, and its age in seconds; -1 when it does not watch that socket. */

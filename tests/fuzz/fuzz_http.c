@@ -10,7 +10,9 @@
  * answer not complete within 10 s aborts), and what it sends back, if
  * anything, must be HTTP/1.x responses.  Built as a libFuzzer target with
  * clang (-DSTICKSLIP_FUZZ=ON) and, with replay.c, as an ordinary test that
- * runs the stored corpus (tests/fuzz/http_corpus).
+ * runs the stored corpus (tests/fuzz/http_corpus).  With FUZZ_HTTP_TCP set
+ * in the environment each input comes instead over a loopback TCP
+ * connection to the daemon's own listening socket, the path clients take.
  */
 #define _GNU_SOURCE
 #include <arpa/inet.h>
@@ -76,17 +78,29 @@ static double now(void) {
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   struct srv_daemon *d = daemon_once();
-  int sv[2];
-  if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
-    abort();
-  /* a local peer: libmicrohttpd then sets no TCP options on it */
-  struct sockaddr_un peer;
-  memset(&peer, 0, sizeof peer);
-  peer.sun_family = AF_UNIX;
+  int sv[2] = {-1, -1};
   unsigned long started = srv_connections_started(d);
-  if (srv_add_connection(d, sv[1], (struct sockaddr *)&peer, sizeof peer)) {
-    close(sv[0]);
-    return 0; /* the daemon refused it (and closed its end) */
+  if (getenv("FUZZ_HTTP_TCP")) {
+    /* through the daemon's own listening socket, as a client comes */
+    struct sockaddr_in a;
+    memset(&a, 0, sizeof a);
+    a.sin_family = AF_INET;
+    a.sin_port = htons((uint16_t)srv_port(d));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if ((sv[0] = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0)) < 0 ||
+        connect(sv[0], (struct sockaddr *)&a, sizeof a) != 0)
+      abort();
+  } else {
+    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
+      abort();
+    /* a local peer: libmicrohttpd then sets no TCP options on it */
+    struct sockaddr_un peer;
+    memset(&peer, 0, sizeof peer);
+    peer.sun_family = AF_UNIX;
+    if (srv_add_connection(d, sv[1], (struct sockaddr *)&peer, sizeof peer)) {
+      close(sv[0]);
+      return 0; /* the daemon refused it (and closed its end) */
+    }
   }
   /* write the input while reading what comes back, so that neither side
    * blocks on a full buffer */
@@ -111,7 +125,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
                                                    : "never took up");
       int receiving = 0, shut = 0;
       double age = 0;
-      if (srv_connection_watched(d, sv[1], &receiving, &shut, &age) == 0)
+      if (sv[1] >= 0 &&
+          srv_connection_watched(d, sv[1], &receiving, &shut, &age) == 0)
         fprintf(stderr,
                 "fuzz_http: the monitor watches it: receiving %d, shut %d, "
                 "age %.3f s\n",
