@@ -7,6 +7,7 @@
 #define SS_API_CODEC_H
 
 #include <jansson.h>
+#include <stdint.h>
 #include <stddef.h>
 
 #include "stickslip.h"
@@ -301,6 +302,16 @@ typedef struct api_wbuf {
 void api__w_put(api_wbuf *b, const char *s, size_t n);
 void api__w_str(api_wbuf *b, const char *s, size_t n);
 void api__w_real(api_wbuf *b, double v);
+/* @a v, finite, as few digits as read back as v, or one more (shortest.c),
+ * written as printf's %g writes them, with ".0" added to a whole number,
+ * into @a out (32 bytes); the length. */
+int api__shortest(double v, char *out);
+/* Entry @a i of the cached powers of ten: 10^k ~ f * 2^e, k returned
+ * (0 when @a i is past the table). */
+int api__pow10_cached(int i, uint64_t *f, int *e);
+/* The shortest digits of the finite, nonzero |v| (v = digits * 10^k) by
+ * Grisu3 alone: their count, or 0 when it cannot be sure. */
+int api__grisu3(double v, char *digits, int *k);
 #define API_W_LIT(b, lit) api__w_put(b, lit, sizeof(lit) - 1)
 
 /* A lazy array: n elements, element i written by item() from a, b, k. */

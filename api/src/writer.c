@@ -67,34 +67,14 @@ void api__w_str(api_wbuf *b, const char *s, size_t n) {
   api__w_put(b, "\"", 1);
 }
 
-/* The shortest of 15, 16 or 17 significant digits that reads back as the
- * same double.  17 always do; the shorter forms are tried only when the
- * 17-digit form ends in a run of zeros or nines, the mark of a decimal input
- * such as 0.0724 printed as 0.072400000000000006. */
+/* The fewest digits that read back as the same double (shortest.c). */
 void api__w_real(api_wbuf *b, double v) {
-  char s[40];
+  char s[32];
   if (!isfinite(v)) {
     api__w_put(b, "null", 4);
     return;
   }
-  int n = snprintf(s, sizeof s, "%.17g", v);
-  if (strstr(s, "0000") || strstr(s, "9999"))
-    for (int prec = 15; prec <= 16; prec++) {
-      char t[40];
-      int m = snprintf(t, sizeof t, "%.*g", prec, v);
-      if (strtod(t, NULL) == v) {
-        memcpy(s, t, (size_t)m + 1);
-        n = m;
-        break;
-      }
-    }
-  /* keep it a real: 1 -> 1.0 */
-  if (!strpbrk(s, ".eE")) {
-    s[n++] = '.';
-    s[n++] = '0';
-    s[n] = 0;
-  }
-  api__w_put(b, s, (size_t)n);
+  api__w_put(b, s, (size_t)api__shortest(v, s));
 }
 
 /* ---- lazy arrays ----------------------------------------------------------

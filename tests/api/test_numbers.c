@@ -1,0 +1,232 @@
+/*
+ * test_numbers.c: the digits of the numbers in every answer (shortest.c).
+ *
+ * Checked against glibc, which converts with multi-precision arithmetic:
+ * each cached power of ten against strtold (exactly, where long double has
+ * a 64-bit significand); each number written must read back (strtod) as
+ * the same double, bit for bit, must be a JSON number, and must have the
+ * fewest digits that read back, the closest to it of that many (found by
+ * trying printf's correctly rounded %.*e from 1 to 17 digits, and its
+ * neighbours).
+ * The doubles: every power of two and of ten, their neighbours, the
+ * extremes, short decimals such as 0.0724, and random bit patterns.
+ * Usage: test_numbers [random-count]   (default 200000)
+ */
+#define _GNU_SOURCE
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "codec.h"
+#include "test.h"
+
+static struct { long n, exact, fallback, bad; } st;
+
+/* A JSON number: -?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][+-]?[0-9]+)? */
+static int json_number(const char *s) {
+  if (*s == '-')
+    s++;
+  if (*s == '0')
+    s++;
+  else if (*s >= '1' && *s <= '9')
+    while (*s >= '0' && *s <= '9')
+      s++;
+  else
+    return 0;
+  if (*s == '.') {
+    s++;
+    if (!(*s >= '0' && *s <= '9'))
+      return 0;
+    while (*s >= '0' && *s <= '9')
+      s++;
+  }
+  if (*s == 'e' || *s == 'E') {
+    s++;
+    if (*s == '+' || *s == '-')
+      s++;
+    if (!(*s >= '0' && *s <= '9'))
+      return 0;
+    while (*s >= '0' && *s <= '9')
+      s++;
+  }
+  return *s == 0;
+}
+
+/* The significant digits of a decimal text (no sign, point, leading or
+ * trailing zeros) and its exponent: value = 0.digits * 10^n. */
+static void digits_of(const char *s, char *dig, int *n) {
+  char all[40];
+  int nall = 0, point = -1;
+  if (*s == '-')
+    s++;
+  for (; *s && *s != 'e' && *s != 'E' && nall < 39; s++)
+    if (*s == '.')
+      point = nall;
+    else
+      all[nall++] = *s;
+  if (point < 0)
+    point = nall;
+  int x = *s ? atoi(s + 1) : 0, first = 0;
+  while (first < nall && all[first] == '0')
+    first++;
+  int len = 0;
+  for (int i = first; i < nall; i++)
+    dig[len++] = all[i];
+  while (len > 0 && dig[len - 1] == '0')
+    len--;
+  dig[len] = 0;
+  *n = point - first + x;
+}
+
+static void check(double v) {
+  char out[40], ref[48], dig[40], rdig[40], g[24];
+  if (!isfinite(v))
+    return;
+  int n = api__shortest(v, out), rn, on, gk;
+  st.n++;
+  if (n != (int)strlen(out) || !json_number(out) || strtod(out, NULL) != v ||
+      signbit(strtod(out, NULL)) != signbit(v)) {
+    if (st.bad++ < 10)
+      TEST_FAIL_("%.17g (%a) written as '%s'", v, v, out);
+    return;
+  }
+  if (v == 0)
+    return;
+  st.fallback += api__grisu3(v, g, &gk) == 0;
+  /* the shortest: for 1, 2, ... digits, the correctly rounded decimal, or
+   * else its neighbour on the side of the interval that reads back as v
+   * (the lower half of the interval of a power of two is the narrower) */
+  for (int p = 1; p <= 17; p++) {
+    snprintf(ref, sizeof ref, "%.*e", p - 1, fabs(v));
+    if (strtod(ref, NULL) == fabs(v))
+      break;
+    unsigned long long m = 0;
+    for (const char *q = ref; *q != 'e'; q++)
+      if (*q != '.')
+        m = 10 * m + (unsigned long long)(*q - '0');
+    int x = atoi(strchr(ref, 'e') + 1) - (p - 1);
+    snprintf(ref, sizeof ref, "%llue%d", m + 1, x);
+    if (strtod(ref, NULL) == fabs(v))
+      break;
+    snprintf(ref, sizeof ref, "%llue%d", m - 1, x);
+    if (strtod(ref, NULL) == fabs(v))
+      break;
+  }
+  digits_of(out, dig, &on);
+  digits_of(ref, rdig, &rn);
+  if (strcmp(dig, rdig) == 0 && on == rn)
+    st.exact++;
+  else if (st.bad++ < 10)
+    TEST_FAIL_("%.17g written as '%s'; the shortest '%s'", v, out, ref);
+}
+
+static void check_near(double v) {
+  check(v);
+  check(-v);
+  check(nextafter(v, INFINITY));
+  check(nextafter(v, 0));
+}
+
+static uint64_t rng = 0x9e3779b97f4a7c15u;
+static uint64_t next64(void) { /* xorshift64* */
+  rng ^= rng >> 12;
+  rng ^= rng << 25;
+  rng ^= rng >> 27;
+  return rng * 2685821657736338717u;
+}
+
+static void same(double v, const char *want) {
+  char out[40];
+  api__shortest(v, out);
+  test_checks_++;
+  if (strcmp(out, want) != 0)
+    TEST_FAIL_("%.17g written as '%s', want '%s'", v, out, want);
+}
+
+int main(int argc, char **argv) {
+  long count = argc > 1 ? atol(argv[1]) : 200000;
+
+  /* the cached powers of ten, against glibc's correctly rounded strtold */
+  uint64_t f;
+  int e, k;
+  ASSERT_EQ_INT(api__pow10_cached(87, &f, &e), 0);
+  ASSERT_EQ_INT(api__pow10_cached(0, &f, &e), -348);
+  ASSERT_TRUE(f == 0xfa8fd5a0081c0288u && e == -1220);
+  ASSERT_EQ_INT(api__pow10_cached(86, &f, &e), 340);
+  ASSERT_TRUE(f == 0xaf87023b9bf0ee6bu && e == 1066);
+#if LDBL_MANT_DIG == 64
+  for (int i = 0; i < 87; i++) {
+    char s[16];
+    k = api__pow10_cached(i, &f, &e);
+    snprintf(s, sizeof s, "1e%d", k);
+    long double want = strtold(s, NULL), got = ldexpl((long double)f, e);
+    test_checks_++;
+    if (want != got || !(f >> 63))
+      TEST_FAIL_("10^%d: %016llx * 2^%d, strtold %La", k, (unsigned long long)f,
+                 e, want);
+  }
+#endif
+
+  /* the layout: printf's %g with 17 digits, and a whole number as x.0 */
+  same(0.1, "0.1");
+  same(0.0724, "0.0724");
+  same(-0.8074871367243053, "-0.8074871367243053");
+  same(1.0, "1.0");
+  same(0.0, "0.0");
+  same(-0.0, "-0.0");
+  same(4.5, "4.5");
+  same(123456.0, "123456.0");
+  same(1e16, "10000000000000000.0");
+  same(1e17, "1e+17");
+  same(1.5e300, "1.5e+300");
+  same(1e-4, "0.0001");
+  same(1.25e-5, "1.25e-05");
+  same(0.1 + 0.2, "0.30000000000000004");
+  same(1.5543122344752192e-15, "1.5543122344752192e-15");
+  same(DBL_MAX, "1.7976931348623157e+308");
+  same(DBL_MIN, "2.2250738585072014e-308");
+  same(4.9406564584124654e-324, "5e-324");
+  same(10.271429855353585, "10.271429855353585");
+
+  /* every power of two and ten, and their neighbours */
+  for (int i = -1074; i <= 1023; i++)
+    check_near(ldexp(1.0, i));
+  for (int i = -323; i <= 308; i++) {
+    char s[16];
+    snprintf(s, sizeof s, "1e%d", i);
+    check_near(strtod(s, NULL));
+  }
+  check_near(DBL_MAX);
+  check_near(DBL_MIN);
+  check_near(DBL_TRUE_MIN);
+  check(nextafter(DBL_MIN, 0)); /* the largest subnormal */
+  /* short decimals, as the parameters of a request are written */
+  for (long i = 0; i < count / 4; i++) {
+    static const uint64_t p10[] = {1e1,  1e2,  1e3,  1e4,  1e5,  1e6,
+                                   1e7,  1e8,  1e9,  1e10, 1e11, 1e12,
+                                   1e13, 1e14, 1e15, 1e16, 1e17};
+    char s[64];
+    uint64_t top = p10[next64() % 17], m = next64() % top; /* 1-17 digits */
+    snprintf(s, sizeof s, "%llue%d", (unsigned long long)m,
+             (int)(next64() % 80) - 40);
+    check(strtod(s, NULL));
+  }
+  /* random bit patterns: every exponent, normal and subnormal */
+  for (long i = 0; i < count; i++) {
+    uint64_t b = next64();
+    double v;
+    memcpy(&v, &b, sizeof v);
+    if (isfinite(v))
+      check(v);
+  }
+  printf("%ld doubles: %ld in the fewest digits, the closest of them, %ld "
+         "not; Grisu3 unsure of %ld (glibc's digits used)\n",
+         st.n, st.exact, st.bad, st.fallback);
+  ASSERT_EQ_INT(st.bad, 0);
+  /* the fast path does the work: glibc only for the rare unsure case */
+  ASSERT_TRUE(st.fallback < st.n / 50);
+  TEST_DONE();
+}
