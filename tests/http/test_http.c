@@ -634,6 +634,20 @@ static void test_framing(void) {
   ASSERT_EQ_INT(http_raw(PORT, get_body, strlen(get_body), &r), 0);
   ASSERT_EQ_INT(r.status, 200);
   http_free(&r);
+  /* the header block: 24 KiB are read, 40 KiB refused (README: 32 KiB) */
+  for (int big = 0; big < 2; big++) {
+    size_t n = big ? 40000 : 24000;
+    char *req = malloc(n + 128);
+    int k = snprintf(req, 128,
+                     "GET /health HTTP/1.1\r\nHost: x\r\nConnection: "
+                     "close\r\nX-Big: ");
+    memset(req + k, 'a', n);
+    memcpy(req + k + n, "\r\n\r\n", 5);
+    ASSERT_EQ_INT(http_raw(PORT, req, (size_t)k + n + 4, &r), 0);
+    ASSERT_EQ_INT(r.status, big ? 431 : 200);
+    http_free(&r);
+    free(req);
+  }
 }
 
 /* EVIDENCE: README "Limits" (Architecture): a connection that does not
