@@ -55,14 +55,15 @@ void ss_trig_eval(const ss_trig *g, double t, int order, double *out) {
 }
 
 typedef struct bounds {
-  double M2, M3, amp; /* derivative bounds and sum of amplitudes */
+  double M1, M2, M3, amp; /* derivative bounds and sum of amplitudes */
 } bounds;
 
 static void get_bounds(const ss_trig *g, bounds *b) {
-  b->M2 = b->M3 = b->amp = 0;
+  b->M1 = b->M2 = b->M3 = b->amp = 0;
   for (int k = 0; k < g->n; k++) {
     double R = sqrt(g->a[k] * g->a[k] + g->b[k] * g->b[k]), w = g->w[k];
     b->amp += R;
+    b->M1 += R * w;
     b->M2 += R * w * w;
     b->M3 += R * w * w * w;
   }
@@ -205,6 +206,11 @@ static int classify(const ss_trig *g, const bounds *b, double a, double tol,
     *t = polish(g, b, a - d, a + d, a);
     return SS_OK;
   }
+  /* Newton on g' converges onto the maximum until g' is rounding noise,
+   * about TOL_ULPS eps (|c1| + sum R_k w_k); divided by a small |g''| that
+   * noise can keep the step above a few ulps of s for ever, so the noise
+   * level ends the iteration too. */
+  double slope_noise = TOL_ULPS * DBL_EPSILON * (fabs(g->c1) + b->M1);
   double s = a;
   int found = 0;
   for (int i = 0; i < 60; i++) {
@@ -214,7 +220,8 @@ static int classify(const ss_trig *g, const bounds *b, double a, double tol,
       break;
     double ds = -u[1] / u[2];
     s += ds;
-    if (fabs(ds) <= 4 * DBL_EPSILON * fmax(1.0, fabs(s))) {
+    if (fabs(ds) <= 4 * DBL_EPSILON * fmax(1.0, fabs(s)) ||
+        fabs(u[1]) <= slope_noise) {
       found = 1;
       break;
     }
