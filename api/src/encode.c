@@ -121,6 +121,8 @@ json_t *api__stability(const ss_stab *st, const api_params *ap) {
   api__set(s, "eigenvalues", ev);
   api__set(s, "spectral_radius", api__real(st->spectral_radius));
   api__set(s, "stable", json_boolean(st->stable));
+  api__set(s, "unit_margin", api__real(st->unit_margin));
+  api__set(s, "marginal", json_boolean(st->marginal));
   api__set(s, "jacobian", api__jacobian(st->jac, ap));
   if (!isnan(st->jac_diff)) {
     api__set(s, "jacobian_fd", api__jacobian(st->jac_fd, ap));

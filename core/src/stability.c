@@ -145,6 +145,8 @@ int ss_stability(const ss_model *m, int n, const ss_mode *modes,
   st->spectral_radius = fmax(hypot(st->eig_re[0], st->eig_im[0]),
                              hypot(st->eig_re[1], st->eig_im[1]));
   st->stable = st->spectral_radius < 1;
+  st->unit_margin = 1 - st->spectral_radius;
+  st->marginal = fabs(st->unit_margin) <= SS_MARGINAL_TOL;
   st->jac_diff = NAN;
   if (!opts || !opts->difference_check)
     return SS_OK;

@@ -178,6 +178,7 @@ static void test_period_doubling(void) {
   p.ur = 12 * p.us;
   ss_orbit start;
   ASSERT_EQ_INT(overshoot_at(&p, &start), 1);
+  ASSERT_TRUE(!start.stab.marginal && start.stab.unit_margin > 1e-3);
   ss_cont_opts co;
   memset(&co, 0, sizeof co);
   co.param = SS_PARAM_CHI;
@@ -216,6 +217,10 @@ static void test_period_doubling(void) {
            "multipliers %.12g, %.12g\n",
            s->value, s->precision, re[0], re[1]);
     ASSERT_TRUE(im[0] == 0 && off < 1e-6);
+    /* there the verdict is marginal, and says how close */
+    ASSERT_TRUE(o.stab.marginal);
+    ASSERT_TRUE(o.stab.unit_margin == 1 - o.stab.spectral_radius);
+    ASSERT_TRUE(fabs(o.stab.unit_margin) < 1e-8);
     pd++;
   }
   ASSERT_EQ_INT(pd, 2);
