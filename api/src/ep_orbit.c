@@ -185,6 +185,20 @@ static json_t *orbit_json(const ss_orbit *o, const ss_sim_result *path,
   return j;
 }
 
+/* The rejected root closest to feasible: its sequence, the condition it
+ * fails by how much, where, and its margins up to that phase. */
+static json_t *rejected_json(const ss_orbit_report *rep, const api_params *ap) {
+  const ss_orbit *o = &rep->rejected;
+  json_t *j = json_object(), *v = margin_json(&o->violation, ap);
+  api__set(j, "kind", json_string(ss_orbit_kind_name(o->kind)));
+  api__set(j, "phases", api__phases(o->n_phases, o->modes, o->durations, ap));
+  api__set(v, "condition", json_string(o->violation_name));
+  api__set(j, "violation", v);
+  api__set(j, "margins", margins_json(o, ap));
+  api__set(j, "reason", json_string(rep->reason));
+  return j;
+}
+
 static json_t *search_json(const orbit_x *x) {
   const ss_orbit_report *rep = &x->rep;
   json_t *se = json_object();
@@ -206,8 +220,11 @@ int ep_orbit_encode(const void *xp, const api_call *c, api_response *out) {
         arr,
         orbit_json(&x->orbits[i], x->paths ? &x->paths[i] : NULL, &x->ap, c));
   api__set(o, "orbits", arr);
-  if (x->rep.reason[0])
+  /* reason explains an absence; a rejection is told with its numbers */
+  if (x->n == 0 && x->rep.reason[0])
     api__set(o, "reason", json_string(x->rep.reason));
+  if (x->rep.has_rejected)
+    api__set(o, "rejected", rejected_json(&x->rep, &x->ap));
   api__set(o, "search", search_json(x));
   return api__answer(o, &SPEC, x, &x->ap, c, out);
 }

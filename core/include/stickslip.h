@@ -605,6 +605,13 @@ typedef struct ss_orbit {
   ss_stab stab;           /**< its stability */
   int iterations;         /**< Newton iterations of the final solve */
   ss_orbit_source source; /**< how the search found it */
+  /** When ss_orbit_check() rejects it: the condition that fails
+   *  (violation_name: "duration", "phase_end", "grazing", "ends_early",
+   *  "switching"), its margin (< 0: how far it fails; 0 for a grazing), the
+   *  phase and the time in it.  The margins above then cover the phases up
+   *  to that one.  violation_name is empty for a feasible orbit. */
+  ss_margin violation;
+  char violation_name[16];
 } ss_orbit;
 
 /** Options of ss_orbit_find(); zero-initialise for the defaults. */
@@ -636,6 +643,10 @@ typedef struct ss_orbit_report {
   int duplicates;    /**< roots already found */
   int truncated;     /**< more orbits than room in the output */
   char reason[256];  /**< why nothing was found, or the closest rejection */
+  /** The rejected root closest to feasible (largest violation.value), with
+   *  its margins, when a root was rejected. */
+  int has_rejected;
+  ss_orbit rejected;
 } ss_orbit_report;
 
 /**

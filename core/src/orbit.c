@@ -365,6 +365,15 @@ static void record_max(void *vp, double t, double g) {
   margin_set(c->mg, -g, c->phase, t);
 }
 
+static void violate(ss_orbit *o, const char *name, double value, int phase,
+                    double t) {
+  snprintf(o->violation_name, sizeof o->violation_name, "%s", name);
+  o->violation.value = value;
+  o->violation.phase = phase;
+  o->violation.t = t;
+  o->min_margin = o->violation; /* what decides, for a rejected root */
+}
+
 static void check_fail(ss_diag *d, const char *fmt, int k, ss_mode m, double a,
                        double b) {
   char where[32];
@@ -387,13 +396,21 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
   }
   o->transversal.value = INFINITY;
   o->transversal.phase = -1;
+  o->violation_name[0] = 0;
+  o->min_margin.value = INFINITY;
+  o->min_margin.phase = -1;
+  o->violation.value = INFINITY;
+  o->violation.phase = -1;
+  o->violation.t = 0;
   o->period = 0;
   o->n_turns = 0;
   for (int k = 0; k < n; k++) {
-    if (!(o->durations[k] > 0))
+    if (!(o->durations[k] > 0)) {
+      violate(o, "duration", o->durations[k], k, 0);
       return ss__fail(d, SS_INFEASIBLE, "durations", o->durations[k],
                       "phase %d (%s) has a non-positive duration %.6g", k,
                       ss_mode_name(o->modes[k]), o->durations[k]);
+    }
     o->period += o->durations[k];
     if (o->modes[k] == SS_MODE_STICK &&
         (k + 1 == n || o->modes[k + 1] == SS_MODE_SLIP))
@@ -402,8 +419,9 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
   ss_z_to_x(m, o->z0, o->x0);
   if (ss__sim_init_mode(&sim, m, 0, o->x0, SS_MODE_SLIP, d))
     return SS_EINVAL;
+  double t0k = 0; /* the start of phase k */
   for (int k = 0; k < n; k++) {
-    double tau = o->durations[k], xs[4];
+    double tau = o->durations[k], xs[4], g_end;
     ss_mode mode = o->modes[k],
             want = k + 1 < n ? o->modes[k + 1] : SS_MODE_SLIP;
     double slack = 1e-7 * (1 + tau);
@@ -445,17 +463,21 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
                     xs, &ge);
       ss_trig_eval(&ge, tau, 1, v);
       margin_set(&o->transversal, v[1], k, tau);
+      g_end = v[0];
     }
     /* the certified finder: the first event must be this phase's end */
     int rc = ss_sim_next_event(&sim, ss_sim_time(&sim) + tau + slack, &ev);
-    if (rc == SS_HORIZON)
+    if (rc == SS_HORIZON) {
+      violate(o, "phase_end", g_end, k, tau);
       return ss__fail(d, SS_INFEASIBLE, "phases", tau,
                       "phase %d (%s) does not end at its duration %.9g: its "
                       "switching function does not reach zero",
                       k, ss_mode_name(mode), tau);
+    }
     if (rc)
       return ss__fail(d, rc, "phases", tau, "event search failed");
     if (ev.kind == SS_EVENT_GRAZING) {
+      violate(o, "grazing", 0, k, ev.t - t0k);
       check_fail(d,
                  "phase %d (%s) touches its switching surface tangentially at "
                  "t = %.9g (duration %.9g): a grazing orbit",
@@ -469,6 +491,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
     for (int i = 0; i <= k; i++)
       t_expect += o->durations[i];
     if (ev.t < t_expect - slack * (k + 1)) {
+      violate(o, "ends_early", ev.t - t_expect, k, ev.t - t0k);
       check_fail(d,
                  "phase %d (%s) ends early, at its first crossing t = %.9g "
                  "instead of %.9g",
@@ -476,19 +499,15 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
       return SS_INFEASIBLE;
     }
     /* the switching conditions at the end of the phase */
-    double f = ss_stick_force(m, ev.x);
-    if (mode == SS_MODE_SLIP) {
-      if (want == SS_MODE_OVERSHOOT)
-        margin_set(&o->switching, -p->ur - f, k, tau); /* (3.2) */
-      else
-        margin_set(&o->switching, f + p->ur, k, tau);
-    } else if (mode == SS_MODE_OVERSHOOT) {
-      if (want == SS_MODE_STICK)
-        margin_set(&o->switching, p->ur - f, k, tau); /* (3.4) */
-      else
-        margin_set(&o->switching, f - p->ur, k, tau);
-    }
+    double f = ss_stick_force(m, ev.x), sw = INFINITY;
+    if (mode == SS_MODE_SLIP)
+      sw = want == SS_MODE_OVERSHOOT ? -p->ur - f /* (3.2) */ : f + p->ur;
+    else if (mode == SS_MODE_OVERSHOOT)
+      sw = want == SS_MODE_STICK ? p->ur - f /* (3.4) */ : f - p->ur;
+    if (mode != SS_MODE_STICK)
+      margin_set(&o->switching, sw, k, tau);
     if (ev.to != want) {
+      violate(o, "switching", mode == SS_MODE_STICK ? 0 : fmin(sw, 0), k, tau);
       if (mode == SS_MODE_SLIP && want == SS_MODE_OVERSHOOT)
         check_fail(d,
                    "the solution violates (3.2) at the end of slip (phase %d, "
@@ -501,6 +520,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
                    k, mode, f, o->switching.value);
       return SS_INFEASIBLE;
     }
+    t0k = t_expect;
   }
   /* closure: back at the start? */
   {
@@ -555,9 +575,11 @@ int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
     return rc;
   ss_stab_opts so = {o->n_turns, opts && opts->difference_check};
   rc = ss_stability(m, n, o->modes, o->durations, o->z0, &so, &o->stab);
-  if (rc == SS_ESINGULAR)
+  if (rc == SS_ESINGULAR) {
+    violate(o, "grazing", 0, -1, 0);
     return ss__fail(d, SS_INFEASIBLE, "orbit", 0,
                     "a phase of the orbit ends tangentially (grazing)");
+  }
   return rc;
 }
 

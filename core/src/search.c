@@ -93,6 +93,31 @@ static void add_orbit(collect *c, const ss_orbit *o) {
     c->rep->truncated++;
 }
 
+/* A phase of (next to) no length. */
+static int degenerate(const ss_orbit *o) {
+  for (int k = 0; k < o->n_phases; k++)
+    if (!(o->durations[k] > 1e-9 * o->period))
+      return 1;
+  return 0;
+}
+
+/* Keep a rejected root if it is the closest to feasible so far; a root
+ * with a phase of (next to) no length, a trivial solution of the duration
+ * equations, only when there is no other. */
+static void keep_rejected(ss_orbit_report *rep, const ss_orbit *o,
+                          const ss_diag *d) {
+  if (rep->has_rejected) {
+    int dn = degenerate(o), dk = degenerate(&rep->rejected);
+    if (dn > dk ||
+        (dn == dk && !(o->violation.value > rep->rejected.violation.value)))
+      return;
+  }
+  rep->has_rejected = 1;
+  rep->rejected = *o;
+  snprintf(rep->reason, sizeof rep->reason, "%s orbit rejected: %s",
+           ss_orbit_kind_name(o->kind), d->text);
+}
+
 /* Refine a candidate sequence and durations; keep it if feasible. */
 static void try_solve(collect *c, int n, const ss_mode *modes,
                       const double *tau, ss_orbit_source source) {
@@ -109,9 +134,7 @@ static void try_solve(collect *c, int n, const ss_mode *modes,
   } else if (rc == SS_INFEASIBLE) {
     c->rep->roots++;
     c->rep->infeasible++;
-    if (!c->rep->reason[0])
-      snprintf(c->rep->reason, sizeof c->rep->reason, "%s orbit rejected: %s",
-               ss_orbit_kind_name(ss_orbit_kind_of(n, modes)), d.text);
+    keep_rejected(c->rep, &o, &d);
   }
 }
 
@@ -244,11 +267,13 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
       o.source = SS_SOURCE_GUESS;
       add_orbit(&c, &o);
     } else {
+      snprintf(rep->reason, sizeof rep->reason, "%s", dd.text);
       if (rc == SS_INFEASIBLE) {
         rep->roots = 1;
         rep->infeasible = 1;
+        rep->has_rejected = 1;
+        rep->rejected = o;
       }
-      snprintf(rep->reason, sizeof rep->reason, "%s", dd.text);
       if (rc != SS_INFEASIBLE && rc != SS_ENOCONV && rc != SS_ESINGULAR)
         return ss__fail(d, rc, dd.where, dd.value, "%s", dd.text);
     }

@@ -146,6 +146,31 @@ static void test_violates_32(void) {
   int rc = ss_orbit_solve(&m, 3, modes, tau, NULL, &g, &d);
   ASSERT_EQ_INT(rc, SS_INFEASIBLE);
   ASSERT_TRUE(strstr(d.text, "(3.2)") != NULL);
+  ASSERT_TRUE(strcmp(g.violation_name, "switching") == 0);
+  /* the rejection in numbers: the margin of (3.2) at the end of the slip,
+   * -(chi (x2 - x1) + ur), as the rk8pd reference has it from the root's
+   * start; the closest rejection of the search likewise */
+  ASSERT_TRUE(rep.has_rejected);
+  const ss_orbit *rj = &rep.rejected;
+  ASSERT_TRUE(strcmp(rj->violation_name, "switching") == 0);
+  ASSERT_EQ_INT(rj->violation.phase, 0);
+  ASSERT_TRUE(rj->violation.value < 0);
+  ASSERT_TRUE(rj->min_margin.value == rj->violation.value);
+  ref_params rp = {p.chi, p.eta, p.us, p.ur, p.V};
+  ref_opts ro = {gsl_odeiv2_step_rk8pd, 1e-13, 1e-13, 0, 1e-13};
+  for (int i = 0; i < 2; i++) {
+    const ss_orbit *r = i ? rj : &g;
+    double x[4];
+    memcpy(x, r->x0, sizeof x);
+    ref_flow(&rp, REF_SLIP, r->durations[0], x, &ro);
+    double want = -(p.chi * (x[1] - x[0]) + p.ur);
+    ASSERT_NEAR(r->violation.value, want, 1e-9);
+    ASSERT_NEAR(r->violation.t, r->durations[0], 0);
+    printf("ur = 0.4, %s: (3.2) fails by %.12g at t = %.9g in the slip "
+           "(reference %.12g)\n",
+           i ? "closest rejection of the search" : "from a guess",
+           r->violation.value, r->violation.t, want);
+  }
 }
 
 /* EVIDENCE: README "How it works, and how it is checked" (periodic orbits):

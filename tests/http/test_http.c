@@ -177,6 +177,17 @@ static void test_endpoints(void) {
   ASSERT_NEAR(num(o, "/orbits/0/phases/0/duration"), 4.4975, 1e-3);
   ASSERT_NEAR(num(o, "/orbits/0/stability/spectral_radius"), 0.19545, 1e-4);
   ASSERT_TRUE(num(o, "/orbits/0/stability/jacobian_difference") < 1e-6);
+  /* reason explains only an absence; the closest rejection is in numbers */
+  ASSERT_TRUE(json_object_get(o, "reason") == NULL);
+  ASSERT_TRUE(num(o, "/rejected/violation/value") <= 0);
+  json_t *none = post("/orbit",
+                      "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,"
+                      "\"ur\":0.4,\"V\":1},\"kind\":\"overshoot\"}",
+                      200);
+  ASSERT_EQ_INT(json_array_size(json_object_get(none, "orbits")), 0);
+  ASSERT_TRUE(json_is_string(json_object_get(none, "reason")));
+  ASSERT_NEAR(num(none, "/rejected/violation/value"), -0.110313724088, 1e-9);
+  json_decref(none);
   /* /stability on the orbit as /orbit returned it */
   json_t *body = json_object();
   json_object_set_new(
