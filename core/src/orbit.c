@@ -592,7 +592,7 @@ int ss__is_repetition(int n, const ss_mode *modes, const double *tau,
     for (int k = m; k < n && same; k++)
       same = modes[k] == modes[k % m] && fabs(tau[k] - tau[k % m]) < tol;
     if (same)
-      return 1;
+      return m;
   }
   return 0;
 }

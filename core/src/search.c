@@ -75,10 +75,34 @@ static int same_orbit(const ss_model *m, const ss_orbit *a, const ss_orbit *b,
   return 0;
 }
 
-static void add_orbit(collect *c, const ss_orbit *o) {
-  /* a shorter orbit travelled twice is that orbit, found again */
-  if (ss__is_repetition(o->n_phases, o->modes, o->durations,
-                        1e-6 * (1 + o->period))) {
+/* A shorter orbit travelled k times is that orbit: solved again from its
+ * first n/k durations, it replaces *o (1), if it repeats to *o within
+ * 1e-8 of the period; else *o is an orbit of its own period (0), or the
+ * shorter one does not solve (-1). */
+static int to_minimal(const ss_model *m, ss_orbit *o, const ss_stab_opts *so) {
+  int b = ss__is_repetition(o->n_phases, o->modes, o->durations,
+                            1e-6 * (1 + o->period));
+  if (!b)
+    return 0;
+  ss_orbit r;
+  ss_diag d;
+  ss_diag_clear(&d);
+  if (ss_orbit_solve(m, b, o->modes, o->durations, so, &r, &d) != SS_OK)
+    return -1;
+  for (int k = 0; k < o->n_phases; k++)
+    if (!(fabs(r.durations[k % b] - o->durations[k]) <=
+          1e-8 * (1 + o->period)))
+      return 0;
+  r.source = o->source;
+  *o = r;
+  return 1;
+}
+
+static void add_orbit(collect *c, const ss_orbit *found) {
+  /* a shorter orbit travelled twice is that orbit */
+  ss_orbit q = *found;
+  const ss_orbit *o = &q;
+  if (to_minimal(c->m, &q, NULL) < 0) {
     c->rep->duplicates++;
     return;
   }
@@ -265,7 +289,13 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
     if (rc == SS_OK) {
       rep->roots = 1;
       o.source = SS_SOURCE_GUESS;
-      add_orbit(&c, &o);
+      /* a guess that goes round a shorter orbit k times finds that orbit */
+      if (to_minimal(m, &o, &so) < 0)
+        rep->duplicates = 1;
+      else if (c.n < c.max)
+        c.out[c.n++] = o;
+      else
+        rep->truncated = 1;
     } else {
       snprintf(rep->reason, sizeof rep->reason, "%s", dd.text);
       if (rc == SS_INFEASIBLE) {

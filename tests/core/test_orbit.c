@@ -440,6 +440,28 @@ static void test_no_repetitions(void) {
     period2 += o->n_turns == 2;
   }
   ASSERT_EQ_INT(period2, 1);
+  /* a guess that goes twice round the paper's orbit finds that orbit, once,
+   * with its minimal period and its own stability (not the square) */
+  ss_params pp = {0.2, 4.0, 0.0724, 0.6178, 1.0};
+  ASSERT_EQ_INT(ss_model_init(&m, &pp, NULL), SS_OK);
+  memset(&oo, 0, sizeof oo);
+  oo.n_guess = 6;
+  const ss_mode seq[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
+  const double tau[3] = {4.4975, 2.7227, 3.0513};
+  for (int k = 0; k < 6; k++) {
+    oo.guess_modes[k] = seq[k % 3];
+    oo.guess[k] = tau[k % 3] * (k < 3 ? 1 : 1.001);
+  }
+  ss_orbit_report rep;
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, out, MAXO, &n, &rep, NULL), SS_OK);
+  ASSERT_EQ_INT(n, 1);
+  if (n == 1) {
+    ASSERT_EQ_INT(out[0].n_phases, 3);
+    ASSERT_EQ_INT(out[0].n_turns, 1);
+    ASSERT_NEAR(out[0].period, 10.271429855353585, 1e-9);
+    ASSERT_NEAR(out[0].stab.spectral_radius, 0.19545246685912715, 1e-9);
+    ASSERT_EQ_INT(out[0].source, SS_SOURCE_GUESS);
+  }
 }
 
 int main(void) {
