@@ -57,6 +57,9 @@ typedef struct conn {
   double start;  /* of the request being received */
   int receiving; /* 0 once the current request is wholly received */
   int shut;      /* the monitor closed it */
+  int peer_port; /* of a TCP peer, else 0 */
+  /* for diagnosis (srv_connection_watched) */
+  atomic_int requests, suspended, resumed;
   char key[SRV_CLIENT_KEY];
 } conn;
 
@@ -247,7 +250,12 @@ static void budget_problem(struct srv_daemon *d, api_response *ar) {
   api_problem(ar, API_P_OVERLOADED, detail, NULL, NULL, 0);
 }
 
-static void job_queued(srv_job *j) { MHD_suspend_connection(((req *)j)->c); }
+static void job_queued(srv_job *j) {
+  req *r = (req *)j;
+  if (r->cn)
+    atomic_fetch_add(&r->cn->suspended, 1);
+  MHD_suspend_connection(r->c);
+}
 
 /* Whether the peer of socket @a fd has closed its end: a read that finds
  * the end of the stream (or a reset) says so; pending bytes (a pipelined
@@ -302,6 +310,8 @@ static void job_done(srv_job *j) {
                 NULL, NULL, 0);
   }
   r->answered = 1;
+  if (r->cn)
+    atomic_fetch_add(&r->cn->resumed, 1);
   MHD_resume_connection(r->c);
 }
 
@@ -791,6 +801,8 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
   r->d = d;
   r->c = c;
   r->cn = ci ? ci->socket_context : NULL;
+  if (r->cn)
+    atomic_fetch_add(&r->cn->requests, 1);
   r->t0 = now();
   r->ep = api_endpoint_count();
   snprintf(r->method, sizeof r->method, "%s", method);
@@ -961,6 +973,17 @@ static void client_key(struct MHD_Connection *c, char *key, size_t n) {
               (socklen_t)n);
 }
 
+static int peer_port(struct MHD_Connection *c) {
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+  const struct sockaddr *sa = ci ? ci->client_addr : NULL;
+  if (sa && sa->sa_family == AF_INET)
+    return ntohs(((const struct sockaddr_in *)sa)->sin_port);
+  if (sa && sa->sa_family == AF_INET6)
+    return ntohs(((const struct sockaddr_in6 *)sa)->sin6_port);
+  return 0;
+}
+
 static void connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
                        enum MHD_ConnectionNotificationCode toe) {
   struct srv_daemon *d = cls;
@@ -975,6 +998,7 @@ static void connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
     cn->start = now();
     cn->receiving = 1;
     client_key(c, cn->key, sizeof cn->key);
+    cn->peer_port = peer_port(c);
     pthread_mutex_lock(&d->mu);
     cn->next = d->conns;
     if (d->conns)
@@ -1144,15 +1168,18 @@ unsigned long srv_connections_started(struct srv_daemon *d) {
   return atomic_load(&d->conns_started);
 }
 
-int srv_connection_watched(struct srv_daemon *d, int fd, int *receiving,
-                           int *shut, double *age) {
+int srv_connection_watched(struct srv_daemon *d, int fd, int peer_port,
+                           srv_conn_state *st) {
   int found = -1;
   pthread_mutex_lock(&d->mu);
-  for (conn *cn = d->conns; cn; cn = cn->next)
-    if (cn->fd == fd) {
-      *receiving = cn->receiving;
-      *shut = cn->shut;
-      *age = now() - cn->start;
+  for (conn *cn = d->conns; cn && found; cn = cn->next)
+    if (fd >= 0 ? cn->fd == fd : cn->peer_port == peer_port) {
+      st->receiving = cn->receiving;
+      st->shut = cn->shut;
+      st->age = now() - cn->start;
+      st->requests = atomic_load(&cn->requests);
+      st->suspended = atomic_load(&cn->suspended);
+      st->resumed = atomic_load(&cn->resumed);
       found = 0;
     }
   pthread_mutex_unlock(&d->mu);

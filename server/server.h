@@ -137,11 +137,21 @@ unsigned long srv_connections_started(struct srv_daemon *d);
 /* The port the daemon listens on (the one the system chose for port 0). */
 int srv_port(struct srv_daemon *d);
 
-/* What the monitor knows of the connection on socket @a fd: 0 with whether
- * its request is still being received, whether the monitor has shut it
- * down, and its age in seconds; -1 when it does not watch that socket. */
-int srv_connection_watched(struct srv_daemon *d, int fd, int *receiving,
-                           int *shut, double *age);
+/* What the monitor knows of one connection, for diagnosing a stall. */
+typedef struct srv_conn_state {
+  int receiving; /* its current request is still being received */
+  int shut;      /* the monitor has shut it down */
+  double age;    /* seconds since its current request started */
+  int requests;  /* requests the handler has seen on it */
+  int suspended; /* a computation holds it suspended */
+  int resumed;   /* ... and the pool has resumed it with an answer */
+} srv_conn_state;
+
+/* The connection on the daemon's socket @a fd, or (fd < 0) the one whose
+ * peer is at local TCP port @a peer_port: 0 with its state, or -1 when
+ * the monitor does not watch such a connection. */
+int srv_connection_watched(struct srv_daemon *d, int fd, int peer_port,
+                           srv_conn_state *st);
 /** The text of the IPv4 or IPv6 address @a s as the daemon writes a
  *  client's address (inet_ntop), into @a out; 0, or -1 when @a s is not
  *  an address. */

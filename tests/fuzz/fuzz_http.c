@@ -13,9 +13,12 @@
  * runs the stored corpus (tests/fuzz/http_corpus).  With FUZZ_HTTP_TCP set
  * in the environment each input comes instead over a loopback TCP
  * connection to the daemon's own listening socket, the path clients take.
+ * With FUZZ_HTTP_GDB set, an answer still unfinished after 3.5 s makes the
+ * harness print every thread's stack (gdb) before it waits out the 10 s.
  */
 #define _GNU_SOURCE
 #include <arpa/inet.h>
+#include <errno.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <signal.h>
@@ -106,7 +109,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
    * blocks on a full buffer */
   size_t sent = 0, got = 0, cap = 1 << 16;
   char *buf = malloc(cap);
-  int wr_open = 1;
+  int wr_open = 1, dumped = 0;
   double deadline = now() + 10;
   for (;;) {
     if (wr_open && sent == size) {
@@ -115,7 +118,22 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     }
     struct pollfd p = {sv[0], (short)(POLLIN | (wr_open ? POLLOUT : 0)), 0};
     int ms = (int)((deadline - now()) * 1e3);
-    if (ms <= 0 || poll(&p, 1, ms) <= 0) {
+    int look = !dumped && getenv("FUZZ_HTTP_GDB");
+    if (look && now() > deadline - 6.5) {
+      char cmd[160];
+      snprintf(cmd, sizeof cmd,
+               "gdb -p %d -batch -ex 'thread apply all bt 12' 1>&2 2>/dev/null",
+               (int)getpid());
+      fprintf(stderr, "fuzz_http: no end after 3.5 s; the threads:\n");
+      if (system(cmd) != 0)
+        fprintf(stderr, "fuzz_http: gdb failed\n");
+      dumped = 1;
+      continue;
+    }
+    int k = ms <= 0 ? 0 : poll(&p, 1, look && ms > 6500 ? ms - 6500 : ms);
+    if ((k < 0 && errno == EINTR) || (k == 0 && look))
+      continue;
+    if (k <= 0) {
       /* which side lost it: libmicrohttpd never took the connection up
        * from its queue of added connections, or the daemon has it */
       fprintf(stderr,
@@ -123,32 +141,38 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
               "%s the connection)\n",
               srv_connections_started(d) > started ? "took up"
                                                    : "never took up");
-      int receiving = 0, shut = 0;
-      double age = 0;
-      if (sv[1] >= 0 &&
-          srv_connection_watched(d, sv[1], &receiving, &shut, &age) == 0)
+      srv_conn_state st;
+      int port = 0;
+      if (sv[1] < 0) {
+        struct sockaddr_in me;
+        socklen_t ml = sizeof me;
+        if (getsockname(sv[0], (struct sockaddr *)&me, &ml) == 0)
+          port = ntohs(me.sin_port);
+      }
+      if (srv_connection_watched(d, sv[1], port, &st) == 0)
         fprintf(stderr,
                 "fuzz_http: the monitor watches it: receiving %d, shut %d, "
-                "age %.3f s\n",
-                receiving, shut, age);
+                "age %.3f s, requests %d, suspended %d, resumed %d\n",
+                st.receiving, st.shut, st.age, st.requests, st.suspended,
+                st.resumed);
       else
         fprintf(stderr, "fuzz_http: the monitor does not watch it\n");
       abort();
     }
     if (wr_open && (p.revents & POLLOUT)) {
-      ssize_t k = send(sv[0], data + sent, size - sent, MSG_NOSIGNAL);
-      if (k > 0)
-        sent += (size_t)k;
+      ssize_t m = send(sv[0], data + sent, size - sent, MSG_NOSIGNAL);
+      if (m > 0)
+        sent += (size_t)m;
       else
         wr_open = 0; /* the daemon closed: no more to write */
     }
     if (p.revents & (POLLIN | POLLHUP | POLLERR)) {
       if (got + 4096 > cap)
         buf = realloc(buf, cap *= 2);
-      ssize_t k = recv(sv[0], buf + got, cap - got, 0);
-      if (k <= 0)
+      ssize_t m = recv(sv[0], buf + got, cap - got, 0);
+      if (m <= 0)
         break;
-      got += (size_t)k;
+      got += (size_t)m;
     }
   }
   close(sv[0]);
