@@ -506,7 +506,7 @@ SS_API void ss_sim_result_free(ss_sim_result *r);
  */
 
 /** The most phases an orbit, a guess or a travelled sequence holds. */
-#define SS_MAX_PHASES 16
+#define SS_MAX_PHASES 32
 
 /** Orbit kinds; the values are bits of a mask (ss_orbit_opts.kinds). */
 typedef enum ss_orbit_kind {

@@ -90,8 +90,7 @@ static int to_minimal(const ss_model *m, ss_orbit *o, const ss_stab_opts *so) {
   if (ss_orbit_solve(m, b, o->modes, o->durations, so, &r, &d) != SS_OK)
     return -1;
   for (int k = 0; k < o->n_phases; k++)
-    if (!(fabs(r.durations[k % b] - o->durations[k]) <=
-          1e-8 * (1 + o->period)))
+    if (!(fabs(r.durations[k % b] - o->durations[k]) <= 1e-8 * (1 + o->period)))
       return 0;
   r.source = o->source;
   *o = r;
@@ -331,31 +330,39 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
   for (int i = 0; i < ns && !over_budget(&c); i++)
     from_simulation(&c, seeds[i], max_k);
 
-  /* 2. duration grids; the slow modal period sets the scale */
-  double T0 = SS_TWO_PI / m->w[0];
+  /* 2. duration grids.  A slip or overshoot lasts a fraction of a modal
+   * period, of the slow mode or, when the two are far apart, of the fast
+   * one; a stick a fraction of 2 pi (x1 under the stick is a unit
+   * oscillator), down to a short one. */
+  double T[2] = {SS_TWO_PI / m->w[0], SS_TWO_PI / m->w[1]};
+  int nT = T[0] > 1.5 * T[1] ? 2 : 1;
   if ((kinds & SS_ORBIT_OVERSHOOT) && !over_budget(&c)) {
     const double ft[] = {0.5, 0.3, 0.7, 0.9};
     const double ft1[] = {0.3, 0.15, 0.5};
-    const double ft2[] = {0.5, 0.25, 0.75};
+    const double ft2[] = {0.5, 0.25, 0.75, 0.1};
     int a = effort == 1 ? 2 : effort == 2 ? 3 : 4, b = effort == 1 ? 2 : 3;
+    int b2 = effort == 1 ? 2 : effort == 2 ? 3 : 4;
     ss_mode modes[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
-    for (int i = 0; i < a; i++)
-      for (int j = 0; j < b; j++)
-        for (int k = 0; k < b && !over_budget(&c); k++) {
-          double tau[3] = {ft[i] * T0, ft1[j] * T0, ft2[k] * SS_TWO_PI};
-          try_solve(&c, 3, modes, tau, SS_SOURCE_DURATION_GRID);
-        }
+    for (int s_ = 0; s_ < nT; s_++)
+      for (int i = 0; i < a; i++)
+        for (int j = 0; j < b; j++)
+          for (int k = 0; k < b2 && !over_budget(&c); k++) {
+            double tau[3] = {ft[i] * T[s_], ft1[j] * T[s_], ft2[k] * SS_TWO_PI};
+            try_solve(&c, 3, modes, tau, SS_SOURCE_DURATION_GRID);
+          }
   }
   if ((kinds & SS_ORBIT_STICKSLIP) && !over_budget(&c)) {
     const double ft[] = {0.5, 0.3, 0.7, 0.9, 1.1};
-    const double ft2[] = {0.5, 0.25, 0.75, 1.0};
-    int a = effort == 1 ? 2 : effort == 2 ? 4 : 5, b = effort == 1 ? 2 : 4;
+    const double ft2[] = {0.5, 0.25, 0.75, 1.0, 0.1, 0.05};
+    int a = effort == 1 ? 2 : effort == 2 ? 4 : 5;
+    int b = effort == 1 ? 2 : effort == 2 ? 5 : 6;
     ss_mode modes[2] = {SS_MODE_SLIP, SS_MODE_STICK};
-    for (int i = 0; i < a; i++)
-      for (int k = 0; k < b && !over_budget(&c); k++) {
-        double tau[2] = {ft[i] * T0, ft2[k] * SS_TWO_PI};
-        try_solve(&c, 2, modes, tau, SS_SOURCE_DURATION_GRID);
-      }
+    for (int s_ = 0; s_ < nT; s_++)
+      for (int i = 0; i < a; i++)
+        for (int k = 0; k < b && !over_budget(&c); k++) {
+          double tau[2] = {ft[i] * T[s_], ft2[k] * SS_TWO_PI};
+          try_solve(&c, 2, modes, tau, SS_SOURCE_DURATION_GRID);
+        }
   }
   /* 3. Newton on P^k from the seeds */
   if ((kinds & SS_ORBIT_OTHER) && effort >= 2) {

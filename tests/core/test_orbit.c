@@ -464,8 +464,63 @@ static void test_no_repetitions(void) {
   }
 }
 
+/* EVIDENCE: README "POST /orbit": just below the grazing that ends the
+ * paper's family (ur = 0.616630036110) the motion settles on an attractor
+ * of 7 turns and 19 phases, more than the 16 phases a sequence once held;
+ * the search at max_period 8 returns it, and the rk8pd reference started
+ * at its x0 travels the same 19 phases and closes. */
+static void test_long_attractor(void) {
+  ss_params p = {0.2, 4.0, 0.0724, 0.6165, 1.0};
+  ss_model m;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  ss_orbit_opts oo;
+  memset(&oo, 0, sizeof oo);
+  oo.max_period = 8;
+  ss_orbit out[MAXO];
+  int n = 0;
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, out, MAXO, &n, NULL, NULL), SS_OK);
+  const ss_orbit *o = NULL;
+  for (int i = 0; i < n; i++)
+    if (out[i].n_phases > 16)
+      o = &out[i];
+  ASSERT_TRUE(o != NULL);
+  if (!o)
+    return;
+  ASSERT_EQ_INT(o->n_turns, 7);
+  ASSERT_EQ_INT(o->n_phases, 19);
+  ASSERT_TRUE(o->stab.stable);
+  ref_params rp = {p.chi, p.eta, p.us, p.ur, p.V};
+  ref_opts ro = {gsl_odeiv2_step_rk8pd, 1e-13, 1e-13, 0, 1e-13};
+  ref_event ev[64];
+  double xe[4];
+  int me;
+  long ne =
+      ref_simulate(&rp, 0, o->x0, REF_SLIP, o->period, &ro, ev, 64, xe, &me);
+  /* the 19 phase ends, the last one (stick -> slip) at the period itself */
+  ASSERT_TRUE(ne == 18 || ne == 19);
+  double worst = 0;
+  for (long k = 0; k < ne && k < 18; k++) {
+    double t = 0;
+    for (int j = 0; j <= k; j++)
+      t += o->durations[j];
+    ASSERT_EQ_INT(ev[k].to, (int)o->modes[k + 1]);
+    worst = fmax(worst, fabs(ev[k].t - t));
+  }
+  ASSERT_TRUE(worst < 1e-7);
+  double cl = 0;
+  for (int i = 0; i < 4; i++)
+    cl = fmax(cl, fabs(xe[i] - o->x0[i]));
+  ASSERT_TRUE(cl < 1e-6);
+  printf("ur = 0.6165, max_period 8: an attractor of %d turns and %d phases, "
+         "period %.9g, spectral radius %.3g; rk8pd phase ends within %.2g, "
+         "closure %.2g\n",
+         o->n_turns, o->n_phases, o->period, o->stab.spectral_radius, worst,
+         cl);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
+  test_long_attractor();
   test_public_api();
   test_paper();
   test_violates_32();
