@@ -20,8 +20,10 @@
 #include "internal.h"
 
 #define SS_TWO_PI 6.283185307179586476925287
-#define MAP_EVENTS 64   /* events allowed for one return to Sigma0 */
-#define SETTLE_TURNS 80 /* returns simulated from each starting point */
+#define MAP_EVENTS 64    /* events allowed for one return to Sigma0 */
+#define SETTLE_TURNS 400 /* returns simulated at most from each start */
+#define SETTLE_CHECK 40  /* returns between two checks for a period */
+#define CLOSE_RETURN_K 4 /* longest period tried from a close return */
 #define MAP_NEWTON_ITERS 30
 
 typedef struct collect {
@@ -198,32 +200,70 @@ static int map_newton(collect *c, double s[2], int k, ss_mode *modes,
   return -1;
 }
 
-/* Source 1: iterate P from a seed; if it settles with period k, refine. */
+/* Source 1: iterate P from a seed; if it settles with period k, refine.
+ * Every SETTLE_CHECK returns the last ones are compared: repeating to
+ * 1e-9 of the scale, it has settled; after SETTLE_TURNS a repetition to
+ * 1e-3 (a slowly attracting orbit) is refined all the same. */
 static void from_simulation(collect *c, const double seed[2], int max_k) {
   double pts[SETTLE_TURNS + 1][2];
-  int np = 0;
+  int np = 0, k_found = 0;
   pts[0][0] = seed[0];
   pts[0][1] = seed[1];
   c->rep->simulations++;
-  for (int i = 0; i < SETTLE_TURNS; i++) {
+  for (int i = 0; i < SETTLE_TURNS && !k_found; i++) {
     if (ss_poincare(c->m, pts[i], 1, MAP_EVENTS, pts[i + 1], NULL, NULL, NULL))
       break;
     np = i + 1;
+    if (np % SETTLE_CHECK || np < 2 * max_k + 1)
+      continue;
+    for (int k = 1; k <= max_k && !k_found; k++)
+      if (fabs(pts[np][0] - pts[np - k][0]) +
+              fabs(pts[np][1] - pts[np - k][1]) <
+          1e-9 * c->scale)
+        k_found = k;
+    if (over_budget(c))
+      break;
   }
   if (np < 2 * max_k + 1)
     return;
-  for (int k = 1; k <= max_k; k++) {
-    double e =
-        fabs(pts[np][0] - pts[np - k][0]) + fabs(pts[np][1] - pts[np - k][1]);
-    if (e < 1e-3 * c->scale) {
-      double s[2] = {pts[np][0], pts[np][1]}, dur[SS_MAX_PHASES];
-      ss_mode modes[SS_MAX_PHASES];
-      int n;
-      c->rep->newton_starts++;
-      if (map_newton(c, s, k, modes, dur, &n) == 0)
-        try_solve(c, n, modes, dur, SS_SOURCE_SIMULATION);
-      return;
+  for (int k = 1; k <= max_k && !k_found; k++)
+    if (fabs(pts[np][0] - pts[np - k][0]) + fabs(pts[np][1] - pts[np - k][1]) <
+        1e-3 * c->scale)
+      k_found = k;
+  double s[2], dur[SS_MAX_PHASES];
+  ss_mode modes[SS_MAX_PHASES];
+  int n;
+  if (k_found) {
+    s[0] = pts[np][0];
+    s[1] = pts[np][1];
+    c->rep->newton_starts++;
+    if (map_newton(c, s, k_found, modes, dur, &n) == 0)
+      try_solve(c, n, modes, dur, SS_SOURCE_SIMULATION);
+    return;
+  }
+  /* Not settled: a long transient, or motion with no attracting orbit.
+   * Where it came closest to repeating after k returns, a periodic orbit
+   * of k turns is near (the close-return idea for unstable periodic orbits
+   * in chaotic motion, and for attractors that a transient reaches late):
+   * Newton on P^k from there, for each k up to CLOSE_RETURN_K. */
+  for (int k = 1; k <= max_k && k <= CLOSE_RETURN_K && !over_budget(c); k++) {
+    int best_j = 0;
+    double best = 0.05 * c->scale;
+    for (int j = np / 4 + k; j <= np; j++) {
+      double e =
+          fabs(pts[j][0] - pts[j - k][0]) + fabs(pts[j][1] - pts[j - k][1]);
+      if (e < best) {
+        best = e;
+        best_j = j;
+      }
     }
+    if (!best_j)
+      continue;
+    s[0] = pts[best_j][0];
+    s[1] = pts[best_j][1];
+    c->rep->newton_starts++;
+    if (map_newton(c, s, k, modes, dur, &n) == 0)
+      try_solve(c, n, modes, dur, SS_SOURCE_SIMULATION);
   }
 }
 
@@ -312,22 +352,30 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
 
   /* seeds on Sigma0 */
   double L = (p->ur - p->us) / p->chi, V = p->V;
-  double seeds[20][2];
-  int ns = 0;
+  double seeds[42][2];
+  int ns = 0, ns_sim;
   {
-    const double z1f[] = {0, 0.5, -0.5, 1.0, -1.0};
-    const double vf[] = {-0.8, 0.0, 0.8, -1.6};
-    int nz = effort == 1 ? 2 : effort == 2 ? 3 : 5;
-    int nv = effort == 1 ? 1 : effort == 2 ? 2 : 4;
-    for (int i = 0; i < nz; i++)
-      for (int j = 0; j < nv; j++) {
-        seeds[ns][0] = z1f[i] * L;
-        seeds[ns][1] = vf[j] * V;
-        ns++;
-      }
+    const double z1f[] = {0, 0.5, -0.5, 1.0, -1.0, 1.5, -1.5};
+    const double vf[] = {-0.8, 0.8, 0.0, -1.6, 1.6, -2.4};
+    /* the first ns_sim of them (a smaller grid) start simulations; Newton
+     * on P^k starts from all */
+    int nz = effort == 1 ? 3 : 7, nv = effort == 1 ? 2 : 6;
+    int nz_sim = effort == 1 ? 3 : effort == 2 ? 5 : 7;
+    int nv_sim = effort == 1 ? 2 : effort == 2 ? 4 : 6;
+    for (int pass = 0; pass < 2; pass++)
+      for (int i = 0; i < nz; i++)
+        for (int j = 0; j < nv; j++) {
+          int in_sim = i < nz_sim && j < nv_sim;
+          if (in_sim != (pass == 0))
+            continue;
+          seeds[ns][0] = z1f[i] * L;
+          seeds[ns][1] = vf[j] * V;
+          ns++;
+        }
+    ns_sim = nz_sim * nv_sim;
   }
   /* 1. simulation to attractors */
-  for (int i = 0; i < ns && !over_budget(&c); i++)
+  for (int i = 0; i < ns_sim && !over_budget(&c); i++)
     from_simulation(&c, seeds[i], max_k);
 
   /* 2. duration grids.  A slip or overshoot lasts a fraction of a modal

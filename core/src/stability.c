@@ -154,12 +154,16 @@ int ss_stability(const ss_model *m, int n, const ss_mode *modes,
    * starts at 1e-6 (balancing the O(h^2) truncation against rounding of
    * order 1e-16/h) and is divided by 10 while two successive estimates
    * disagree by more than 1e-7 of their size: near a tangential switching
-   * the map is smooth only in a small neighbourhood.  The choice of h looks
-   * only at the differences themselves, never at the analytic Jacobian. */
+   * the map is smooth only in a small neighbourhood.  When they never agree
+   * that well (a long orbit whose rounding grows before its truncation is
+   * small), the estimate of the closest successive pair is kept, not the
+   * last, which rounding spoils.  The choice of h looks only at the
+   * differences themselves, never at the analytic Jacobian. */
   double s0[2] = {z0[0], z0[2]};
   for (int j = 0; j < 2; j++) {
-    double prev[2] = {NAN, NAN}, cur[2] = {NAN, NAN};
-    for (double hr = 1e-6; hr >= 1e-10; hr *= 0.1) {
+    double est[5][2], best_gap = INFINITY;
+    int ne = 0, pick = -1;
+    for (double hr = 1e-6; hr >= 1e-10 && ne < 5; hr *= 0.1) {
       double h = hr * (1 + fabs(s0[j])), sp[2], sm[2], op[2], om[2];
       memcpy(sp, s0, sizeof sp);
       memcpy(sm, s0, sizeof sm);
@@ -169,17 +173,25 @@ int ss_stability(const ss_model *m, int n, const ss_mode *modes,
                       NULL) ||
           ss_poincare(m, sm, turns, 64 * (size_t)(n + 1), om, NULL, NULL, NULL))
         break;
-      cur[0] = (op[0] - om[0]) / (sp[j] - sm[j]);
-      cur[1] = (op[1] - om[1]) / (sp[j] - sm[j]);
+      est[ne][0] = (op[0] - om[0]) / (sp[j] - sm[j]);
+      est[ne][1] = (op[1] - om[1]) / (sp[j] - sm[j]);
+      ne++;
+      if (ne < 2)
+        continue;
+      const double *cur = est[ne - 1], *prev = est[ne - 2];
       double size = fmax(1.0, fmax(fabs(cur[0]), fabs(cur[1])));
-      if (!isnan(prev[0]) && fabs(cur[0] - prev[0]) <= 1e-7 * size &&
-          fabs(cur[1] - prev[1]) <= 1e-7 * size)
+      double gap = fmax(fabs(cur[0] - prev[0]), fabs(cur[1] - prev[1])) / size;
+      if (gap < best_gap) {
+        best_gap = gap;
+        pick = ne - 1;
+      }
+      if (gap <= 1e-7)
         break;
-      prev[0] = cur[0];
-      prev[1] = cur[1];
     }
-    st->jac_fd[0][j] = cur[0];
-    st->jac_fd[1][j] = cur[1];
+    if (pick < 0)
+      pick = ne - 1;
+    st->jac_fd[0][j] = pick >= 0 ? est[pick][0] : NAN;
+    st->jac_fd[1][j] = pick >= 0 ? est[pick][1] : NAN;
   }
   double diff = 0;
   for (int i = 0; i < 2; i++)
