@@ -221,7 +221,7 @@ static int tangent(const curve *cv, const double *y, const double *prev,
 static int correct(const curve *cv, double *y, const double *a,
                    const double *base, int *iters, double *res) {
   int n = cv->ne, np = n + 1, piv[NMAX];
-  double A[NMAX * NMAX], F[NMAX];
+  double A[NMAX * NMAX], F[NMAX], dy_prev = INFINITY;
   for (int it = 1; it <= 12; it++) {
     int rc = cv->f(cv->ctx, y, F, A);
     if (rc != SS_OK)
@@ -245,7 +245,11 @@ static int correct(const curve *cv, double *y, const double *a,
     }
     if (!isfinite(dy) || dy > 1)
       return SS_ENOCONV;
-    if (dy <= 1e-13 * ymax) {
+    /* converged, or (an ill-conditioned system) the steps stopped
+     * shrinking at the level of rounding */
+    int stalled = it >= 4 && dy <= 1e-9 * ymax && dy > 0.5 * dy_prev;
+    dy_prev = dy;
+    if (dy <= 1e-13 * ymax || stalled) {
       /* the residual at the final iterate */
       if ((rc = cv->f(cv->ctx, y, F, NULL)) != SS_OK)
         return rc;
