@@ -22,9 +22,12 @@
 #define SS_TWO_PI 6.283185307179586476925287
 #define MAP_EVENTS 64    /* events allowed for one return to Sigma0 */
 #define SETTLE_TURNS 400 /* returns simulated at most from each start */
-#define SETTLE_CHECK 40  /* returns between two checks for a period */
+#define SETTLE_CHECK 10  /* returns between two checks for a period */
 #define CLOSE_RETURN_K 4 /* longest period tried from a close return */
+#define KNOWN_MAX 64     /* returns of stable orbits a simulation looks for */
 #define MAP_NEWTON_ITERS 30
+#define SS_SCAN_PERIODS 1.5 /* the box of the scan, in slow modal periods */
+#define SCAN_MAX_ROOTS 256
 
 typedef struct collect {
   const ss_model *m;
@@ -36,6 +39,11 @@ typedef struct collect {
   int (*cancelled)(void *);
   void *cancel_cls;
   int stopped; /* SS_ELIMIT_TIME or SS_ECANCELED once the search must stop */
+  /* the returns to Sigma0 (x1, x1') of the stable orbits found, for
+   * simulations to stop when they reach one; made for the first n_seen of
+   * out */
+  double known[KNOWN_MAX][2];
+  int n_known, n_seen;
 } collect;
 
 /* Whether the search must stop: its time budget is spent, or its caller
@@ -47,6 +55,8 @@ static int over_budget(collect *c) {
     c->stopped = SS_ECANCELED;
   return c->stopped != 0;
 }
+
+static int scan_stop(void *cls) { return over_budget(cls); }
 
 /* Does orbit b pass through a's start with a's sequence rotated?  Compares
  * a.z0 with b's state at each of its stick -> slip points. */
@@ -204,6 +214,34 @@ static int map_newton(collect *c, double s[2], int k, ss_mode *modes,
  * Every SETTLE_CHECK returns the last ones are compared: repeating to
  * 1e-9 of the scale, it has settled; after SETTLE_TURNS a repetition to
  * 1e-3 (a slowly attracting orbit) is refined all the same. */
+/* Has x (on Sigma0) reached a stable orbit already found?  Brings the list
+ * of their returns up to date first. */
+static int reached_known(collect *c, const double x[2]) {
+  for (; c->n_seen < c->n; c->n_seen++) {
+    const ss_orbit *o = &c->out[c->n_seen];
+    if (!(o->stab.spectral_radius < 1))
+      continue;
+    double y[4];
+    memcpy(y, o->x0, sizeof y);
+    for (int r = 0; r < o->n_phases; r++) {
+      if (o->modes[r] == SS_MODE_SLIP &&
+          (r == 0 || o->modes[r - 1] == SS_MODE_STICK) &&
+          c->n_known < KNOWN_MAX) {
+        c->known[c->n_known][0] = y[0];
+        c->known[c->n_known][1] = y[2];
+        c->n_known++;
+      }
+      ss_flow(c->m, o->modes[r], o->durations[r], y, y);
+      y[3] = c->m->p.V;
+    }
+  }
+  for (int i = 0; i < c->n_known; i++)
+    if (fabs(x[0] - c->known[i][0]) + fabs(x[1] - c->known[i][1]) <
+        1e-7 * c->scale)
+      return 1;
+  return 0;
+}
+
 static void from_simulation(collect *c, const double seed[2], int max_k) {
   double pts[SETTLE_TURNS + 1][2];
   int np = 0, k_found = 0;
@@ -214,6 +252,9 @@ static void from_simulation(collect *c, const double seed[2], int max_k) {
     if (ss_poincare(c->m, pts[i], 1, MAP_EVENTS, pts[i + 1], NULL, NULL, NULL))
       break;
     np = i + 1;
+    /* within 1e-7 of a stable orbit found: it settles there, nothing new */
+    if (reached_known(c, pts[np]))
+      return;
     if (np % SETTLE_CHECK || np < 2 * max_k + 1)
       continue;
     for (int k = 1; k <= max_k && !k_found; k++)
@@ -299,6 +340,7 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
   c.cancelled = opts->cancelled;
   c.cancel_cls = opts->cancel_cls;
   c.stopped = 0;
+  c.n_known = c.n_seen = 0;
   *n_out = 0;
 
   if (opts->n_guess > 0) {
@@ -358,9 +400,11 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
     const double z1f[] = {0, 0.5, -0.5, 1.0, -1.0, 1.5, -1.5};
     const double vf[] = {-0.8, 0.8, 0.0, -1.6, 1.6, -2.4};
     /* the first ns_sim of them (a smaller grid) start simulations; Newton
-     * on P^k starts from all */
+     * on P^k starts from all.  The period-1 orbits of the two families
+     * come from the scan below, stable or not; simulations are for the
+     * attractors of other sequences and periods */
     int nz = effort == 1 ? 3 : 7, nv = effort == 1 ? 2 : 6;
-    int nz_sim = effort == 1 ? 3 : effort == 2 ? 5 : 7;
+    int nz_sim = effort == 1 || effort == 2 ? 3 : 7;
     int nv_sim = effort == 1 ? 2 : effort == 2 ? 4 : 6;
     for (int pass = 0; pass < 2; pass++)
       for (int i = 0; i < nz; i++)
@@ -378,39 +422,51 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
   for (int i = 0; i < ns_sim && !over_budget(&c); i++)
     from_simulation(&c, seeds[i], max_k);
 
-  /* 2. duration grids.  A slip or overshoot lasts a fraction of a modal
-   * period, of the slow mode or, when the two are far apart, of the fast
-   * one; a stick a fraction of 2 pi (x1 under the stick is a unit
-   * oscillator), down to a short one. */
-  double T[2] = {SS_TWO_PI / m->w[0], SS_TWO_PI / m->w[1]};
-  int nT = T[0] > 1.5 * T[1] ? 2 : 1;
-  if ((kinds & SS_ORBIT_OVERSHOOT) && !over_budget(&c)) {
-    const double ft[] = {0.5, 0.3, 0.7, 0.9};
-    const double ft1[] = {0.3, 0.15, 0.5};
-    const double ft2[] = {0.5, 0.25, 0.75, 0.1};
-    int a = effort == 1 ? 2 : effort == 2 ? 3 : 4, b = effort == 1 ? 2 : 3;
-    int b2 = effort == 1 ? 2 : effort == 2 ? 3 : 4;
-    ss_mode modes[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
-    for (int s_ = 0; s_ < nT; s_++)
-      for (int i = 0; i < a; i++)
-        for (int j = 0; j < b; j++)
-          for (int k = 0; k < b2 && !over_budget(&c); k++) {
-            double tau[3] = {ft[i] * T[s_], ft1[j] * T[s_], ft2[k] * SS_TWO_PI};
-            try_solve(&c, 3, modes, tau, SS_SOURCE_DURATION_GRID);
-          }
-  }
-  if ((kinds & SS_ORBIT_STICKSLIP) && !over_budget(&c)) {
-    const double ft[] = {0.5, 0.3, 0.7, 0.9, 1.1};
-    const double ft2[] = {0.5, 0.25, 0.75, 1.0, 0.1, 0.05};
-    int a = effort == 1 ? 2 : effort == 2 ? 4 : 5;
-    int b = effort == 1 ? 2 : effort == 2 ? 5 : 6;
-    ss_mode modes[2] = {SS_MODE_SLIP, SS_MODE_STICK};
-    for (int s_ = 0; s_ < nT; s_++)
-      for (int i = 0; i < a; i++)
-        for (int k = 0; k < b && !over_budget(&c); k++) {
-          double tau[2] = {ft[i] * T[s_], ft2[k] * SS_TWO_PI};
-          try_solve(&c, 2, modes, tau, SS_SOURCE_DURATION_GRID);
+  /* 2. every root of the period-1 duration equations of the two families
+   * with each duration within 1.5 slow modal periods, from a scan of the
+   * equations reduced to two durations (scan.c) at a step of 0.3 rad of the
+   * fastest motion (the fast mode, or x1 under stick) */
+  {
+    double dmax = SS_SCAN_PERIODS * SS_TWO_PI / m->w[0];
+    double h = (effort == 1   ? 0.5
+                : effort == 2 ? 0.3
+                              : 0.15) /
+               fmax(m->w[1], 1.0);
+    static const ss_mode seq[2][3] = {
+        {SS_MODE_SLIP, SS_MODE_STICK, SS_MODE_STICK},
+        {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK}};
+    const unsigned kind[2] = {SS_ORBIT_STICKSLIP, SS_ORBIT_OVERSHOOT};
+    for (int f = 0; f < 2; f++) {
+      if (!(kinds & kind[f]) || over_budget(&c))
+        continue;
+      double roots[SCAN_MAX_ROOTS][3], rejected[2][3];
+      int nr = 0, n_rejected = 0, before = c.n;
+      int rc = ss__scan_period1(m, 2 + f, dmax, h, roots, SCAN_MAX_ROOTS, &nr,
+                                rejected, &n_rejected, &rep->newton_starts,
+                                scan_stop, &c);
+      if (rc == SS_ENOMEM)
+        return ss__fail(d, rc, "", 0, "out of memory in the orbit search");
+      for (int r = 0; r < nr && !over_budget(&c); r++) {
+        /* one the simulations found already needs no solve */
+        int known = 0;
+        for (int i = 0; i < c.n && !known; i++) {
+          const ss_orbit *q = &c.out[i];
+          known = q->n_phases == 2 + f && q->n_turns == 1;
+          for (int k = 0; k < 2 + f && known; k++)
+            known =
+                q->modes[k] == seq[f][k] &&
+                fabs(q->durations[k] - roots[r][k]) < 1e-7 * (1 + q->period);
         }
+        if (known)
+          rep->duplicates++;
+        else
+          try_solve(&c, 2 + f, seq[f], roots[r], SS_SOURCE_DURATION_GRID);
+      }
+      /* none of the family: its closest rejected roots say why, in
+       * numbers (the report keeps the closest to feasible) */
+      for (int r = 0; r < n_rejected && c.n == before && !over_budget(&c); r++)
+        try_solve(&c, 2 + f, seq[f], rejected[r], SS_SOURCE_DURATION_GRID);
+    }
   }
   /* 3. Newton on P^k from the seeds */
   if ((kinds & SS_ORBIT_OTHER) && effort >= 2) {

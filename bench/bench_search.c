@@ -1,0 +1,87 @@
+/*
+ * bench_search.c: the default orbit search with no guess over the parameter
+ * battery of tests/core/test_search.c (the same 40 random sets, the same
+ * generator): the CPU time of each set (median of 5 runs), and the median
+ * and worst over the battery, for the default effort and for effort 1 and
+ * 3.  Writes results/search.md.
+ * Usage: bench_search [results-dir]
+ */
+#include "bench_common.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "stickslip.h"
+
+#define SETS 40
+#define REPS 5
+#define MAXO 128
+
+static uint64_t rng = 0x2545f4914f6cdd1du;
+static double unif(double a, double b) {
+  rng ^= rng >> 12;
+  rng ^= rng << 25;
+  rng ^= rng >> 27;
+  return a + (b - a) * (double)((rng * 2685821657736338717u) >> 11) * 0x1p-53;
+}
+
+int main(int argc, char **argv) {
+  ss_params ps[SETS];
+  for (int s = 0; s < SETS; s++) {
+    ps[s].chi = unif(0.05, 0.9);
+    ps[s].eta = exp(unif(log(0.2), log(20)));
+    ps[s].us = unif(0.02, 0.3);
+    ps[s].ur = ps[s].us * exp(unif(log(1.5), log(20)));
+    ps[s].V = 1;
+  }
+  char path[512];
+  snprintf(path, sizeof path, "%s/search.md", argc > 1 ? argv[1] : ".");
+  FILE *f = fopen(path, "w");
+  if (!f) {
+    perror(path);
+    return 1;
+  }
+  fprintf(f,
+          "# The orbit search with no guess over the test battery\n\n"
+          "CPU time of `ss_orbit_find` (all kinds, max_period 4) on the "
+          "40 random parameter sets of tests/core/test_search.c, each the "
+          "median of %d runs; one run of bench_search.\n\n"
+          "| effort | median | worst | orbits returned in all |\n"
+          "|---|---|---|---|\n",
+          REPS);
+  static ss_orbit out[MAXO];
+  for (int effort = 1; effort <= 3; effort++) {
+    double per[SETS];
+    int total = 0;
+    for (int s = 0; s < SETS; s++) {
+      ss_model m;
+      if (ss_model_init(&m, &ps[s], NULL) != SS_OK)
+        return 1;
+      ss_orbit_opts oo;
+      memset(&oo, 0, sizeof oo);
+      oo.effort = effort;
+      double t[REPS];
+      int n = 0;
+      for (int r = 0; r < REPS; r++) {
+        double t0 = cpu_now();
+        if (ss_orbit_find(&m, &oo, out, MAXO, &n, NULL, NULL) != SS_OK)
+          return 1;
+        t[r] = cpu_now() - t0;
+      }
+      per[s] = median(t, REPS);
+      total += n;
+    }
+    double worst = 0;
+    for (int s = 0; s < SETS; s++)
+      worst = fmax(worst, per[s]);
+    double med = median(per, SETS);
+    printf("effort %d: median %.2f ms, worst %.2f ms, %d orbits\n", effort,
+           1e3 * med, 1e3 * worst, total);
+    fprintf(f, "| %d%s | %.2f ms | %.2f ms | %d |\n", effort,
+            effort == 2 ? " (default)" : "", 1e3 * med, 1e3 * worst, total);
+  }
+  fclose(f);
+  return 0;
+}

@@ -1,0 +1,569 @@
+/*
+ * scan.c: the roots of the period-1 duration equations of the slip-stick
+ * and slip-overshoot-stick sequences, every duration in a box (0, dmax].
+ *
+ * Two equations in two durations.  The orbit starts at the stick -> slip
+ * point y0(s) = (s1, s1 + k, s2, V), k = ur/chi, s = (x1, x1').  The slip
+ * and overshoot flows are affine, so the state at the end of the slip (and
+ * of the overshoot) is affine in s, and each of them must end with x2' = V:
+ * one linear condition on s per phase.  Under stick x2 grows like V t, so
+ * the closure of x2 is linear too: for slip-stick it is the second
+ * condition on s, x2(end of slip) + V t2 = s1 + k; for slip-overshoot-stick
+ * it gives the stick's duration, t3 = (s1 + k - x2(end of overshoot)) / V.
+ * Under stick c = x1 - chi x2 turns at unit frequency, c(t) = Ac cos t +
+ * Bc sin t, so the closure of (x1, x1') after a stick of duration t is
+ *   R0 = chi (s1 + k) + Ac cos t + Bc sin t - s1,
+ *   R1 = chi V - Ac sin t + Bc cos t - s2,
+ * Ac = x1 - chi x2 and Bc = x1' - chi V at the start of the stick.  The
+ * unknowns are (t1, t2) for both sequences.
+ *
+ * Scan: the residual times the determinant of the linear system for s (for
+ * slip-stick a smooth function, with no pole) on a grid of step h; a cell is
+ * a candidate when each component's corner values reach zero within half
+ * their spread, which also catches zero lines that curve inside the cell
+ * (where not both change sign, the plane through the corners must also put
+ * the zero within two cells).  For slip-overshoot-stick t3 is not smooth
+ * where the system is singular: a cell across which the determinant changes
+ * sign or t3 turns by more than 0.5 rad is split, up to 4 times finer; a
+ * cell whose corners do not all give t3 in (-0.5, dmax + 0.5) cannot hold a
+ * root with t3 in the box, and away from a pole neither can one where the
+ * rotation condition E (below) stays away from zero.  Newton on the reduced
+ * equations times det (forward differences) starts at the centre of each
+ * candidate cell; where both components change sign and Newton's first step
+ * leaves the cell's reach, the cell is split and each quarter tried again,
+ * down to 1/8.  A root is kept if its phases, sampled on the grid and at
+ * their ends, keep the rules of their modes (implausible()), once.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal.h"
+
+#define SCAN_MAX_DEPTH 2
+#define SCAN_T3_TURN 0.5
+#define SCAN_NEWTON_ITERS 16
+#define SCAN_MAX_CELLS 1000 /* per axis */
+#define SCAN_REFINE 3       /* halvings of a cell Newton fails in */
+
+/* The slip from y0(s) for time t: x = Y s + y. */
+typedef struct slip_map {
+  double Y[4][2], y[4];
+} slip_map;
+
+/* The overshoot for time t: x = G x0 + g. */
+typedef struct over_map {
+  double G[4][4], g[4];
+} over_map;
+
+/* x -> A (x - D) + c + D, D = (d0, 0): the affine flow in x coordinates. */
+static void affine(const ss_model *m, ss_mode mode, double t, double G[4][4],
+                   double g[4]) {
+  double A[16], c[4], D[4] = {m->d0[0], m->d0[1], 0, 0};
+  ss_transition(m, mode, t, A, c, NULL, NULL);
+  for (int i = 0; i < 4; i++) {
+    g[i] = c[i] + D[i];
+    for (int j = 0; j < 4; j++) {
+      G[i][j] = A[4 * i + j];
+      g[i] -= G[i][j] * D[j];
+    }
+  }
+}
+
+static void slip_at(const ss_model *m, double t, slip_map *S) {
+  double G[4][4], g[4], k = m->p.ur / m->p.chi, V = m->p.V;
+  affine(m, SS_MODE_SLIP, t, G, g);
+  for (int i = 0; i < 4; i++) {
+    S->Y[i][0] = G[i][0] + G[i][1];
+    S->Y[i][1] = G[i][2];
+    S->y[i] = G[i][1] * k + G[i][3] * V + g[i];
+  }
+}
+
+static void over_at(const ss_model *m, double t, over_map *O) {
+  affine(m, SS_MODE_OVERSHOOT, t, O->G, O->g);
+}
+
+/* One point of the scan: the determinant, det * R, and (overshoot) t3. */
+typedef struct point {
+  double det, Rn[2], t3;
+  /* det^2 (|u|^2 - |w|^2): the stick turns w = (Ac, Bc) into u = (s1 -
+   * chi (s1 + k), s2 - chi V), a rotation, so a root needs E = 0; E does not
+   * depend on the stick's duration */
+  double E;
+} point;
+
+/* The stick's closure residual times det, from the stick's start state
+ * times det (xd) and det * s (sn), for a stick of duration t (co = cos t,
+ * si = sin t). */
+static void closure(const ss_model *m, const double xd[3], const double sn[2],
+                    double det, double co, double si, point *q) {
+  double chi = m->p.chi, V = m->p.V, k = m->p.ur / chi;
+  double Ac = xd[0] - chi * xd[1], Bc = xd[2] - chi * V * det;
+  double u0 = sn[0] - chi * (sn[0] + k * det), u1 = sn[1] - chi * V * det;
+  q->E = u0 * u0 + u1 * u1 - Ac * Ac - Bc * Bc;
+  q->Rn[0] = chi * (sn[0] + k * det) + Ac * co + Bc * si - sn[0];
+  q->Rn[1] = chi * V * det - Ac * si + Bc * co - sn[1];
+}
+
+/* Slip-stick at (t1 of S, t2), c2 = cos t2, s2 = sin t2; s = sn / det
+ * into sn. */
+static void eval_ss(const ss_model *m, const slip_map *S, double t2, double c2,
+                    double s2, point *q, double sn[2]) {
+  double V = m->p.V, k = m->p.ur / m->p.chi;
+  /* x2' = V at the end of the slip; x2 + V t2 = s1 + k at the end of the
+   * stick */
+  double a0 = S->Y[3][0], a1 = S->Y[3][1], ra = V - S->y[3];
+  double b0 = S->Y[1][0] - 1, b1 = S->Y[1][1], rb = k - S->y[1] - V * t2;
+  double det = a0 * b1 - a1 * b0;
+  sn[0] = ra * b1 - a1 * rb;
+  sn[1] = a0 * rb - b0 * ra;
+  double xd[3];
+  for (int i = 0; i < 3; i++)
+    xd[i] = S->Y[i][0] * sn[0] + S->Y[i][1] * sn[1] + S->y[i] * det;
+  q->det = det;
+  q->t3 = 0;
+  closure(m, xd, sn, det, c2, s2, q);
+}
+
+/* Slip-overshoot-stick at (t1 of S, t2 of O); s = sn / det into sn.  The
+ * residual only where t3 is in (-0.5, tmax + 0.5) (else NAN: such a point
+ * is never a corner of a candidate cell). */
+static void eval_sos(const ss_model *m, const slip_map *S, const over_map *O,
+                     double tmax, point *q, double sn[2]) {
+  double V = m->p.V, k = m->p.ur / m->p.chi;
+  /* the overshoot's end as an affine function of s: GY s + (G y + g) */
+  double GY[4][2], Gy[4];
+  for (int i = 0; i < 4; i++) {
+    GY[i][0] = GY[i][1] = 0;
+    Gy[i] = O->g[i];
+    for (int l = 0; l < 4; l++) {
+      GY[i][0] += O->G[i][l] * S->Y[l][0];
+      GY[i][1] += O->G[i][l] * S->Y[l][1];
+      Gy[i] += O->G[i][l] * S->y[l];
+    }
+  }
+  double a0 = S->Y[3][0], a1 = S->Y[3][1], ra = V - S->y[3];
+  double b0 = GY[3][0], b1 = GY[3][1], rb = V - Gy[3];
+  double det = a0 * b1 - a1 * b0;
+  sn[0] = ra * b1 - a1 * rb;
+  sn[1] = a0 * rb - b0 * ra;
+  double xd[3];
+  for (int i = 0; i < 3; i++)
+    xd[i] = GY[i][0] * sn[0] + GY[i][1] * sn[1] + Gy[i] * det;
+  q->det = det;
+  q->t3 = (sn[0] + k * det - xd[1]) / (V * det);
+  if (!isfinite(q->t3)) {
+    q->Rn[0] = q->Rn[1] = NAN;
+    q->E = NAN;
+    return;
+  }
+  if (!(q->t3 > -0.5 && q->t3 < tmax + 0.5)) {
+    closure(m, xd, sn, det, 1, 0, q);
+    q->Rn[0] = q->Rn[1] = NAN;
+    return;
+  }
+  closure(m, xd, sn, det, cos(q->t3), sin(q->t3), q);
+}
+
+static void eval_at(const ss_model *m, int n, double t1, double t2, point *q) {
+  slip_map S;
+  double sn[2];
+  slip_at(m, t1, &S);
+  if (n == 2) {
+    eval_ss(m, &S, t2, cos(t2), sin(t2), q, sn);
+  } else {
+    over_map O;
+    over_at(m, t2, &O);
+    eval_sos(m, &S, &O, INFINITY, q, sn);
+  }
+}
+
+/* The reduced residual at t, times det (smooth where R has a pole) into
+ * Rn, and det; -1 where it is not finite. */
+static int reduced(const ss_model *m, int n, const double t[2], double Rn[2],
+                   double *det, double *t3) {
+  point q;
+  eval_at(m, n, t[0], t[1], &q);
+  Rn[0] = q.Rn[0];
+  Rn[1] = q.Rn[1];
+  *det = q.det;
+  *t3 = q.t3;
+  return isfinite(Rn[0]) && isfinite(Rn[1]) ? 0 : -1;
+}
+
+typedef struct scan {
+  const ss_model *m;
+  int n;       /* 2: slip-stick, 3: slip-overshoot-stick */
+  double dmax; /* the box */
+  double scale;
+  double h;          /* the grid's step */
+  long np;           /* grid points per axis */
+  long stride;       /* fine steps per grid step: 2^SCAN_MAX_DEPTH */
+  const slip_map *S; /* the slip for times j h / stride */
+  const over_map *O; /* the overshoot for the same times (n = 3) */
+  double (*roots)[3];
+  int max, count;
+  int newton; /* Newton starts */
+  /* the roots closest to passing implausible(), failing at a phase's end
+   * [0] or inside a phase [1], and how far they fail (INFINITY: none) */
+  double rejected[2][3], rejected_by[2];
+} scan;
+
+/* How far a root is from being an orbit (0: it may be one): each phase, sampled
+ * at the grid's times and at its end, keeps the rule of its mode.  x2' < V
+ * inside a slip, x2' > V inside an overshoot, |f| < ur inside a stick (f = chi
+ * (x2 - x1), the friction force); |f| <= ur where a slip or an overshoot ends
+ * into stick, f <= -ur where a slip ends into overshoot (3.2); the first rule
+ * that fails gives how far it fails.  A root that fails here by more than
+ * rounding fails ss_orbit_check() too, which decides the rest. */
+static double implausible(const scan *sc, const double t[2], double t3,
+                          int *inside) {
+  *inside = 1;
+  const ss_model *m = sc->m;
+  double chi = m->p.chi, ur = m->p.ur, V = m->p.V;
+  double tol = 1e-9 * (ur + sc->scale);
+  slip_map S;
+  over_map O;
+  point q;
+  double sn[2], s[2], x[4], y[4];
+  slip_at(m, t[0], &S);
+  if (sc->n == 2) {
+    eval_ss(m, &S, t[1], cos(t[1]), sin(t[1]), &q, sn);
+  } else {
+    over_at(m, t[1], &O);
+    eval_sos(m, &S, &O, INFINITY, &q, sn);
+  }
+  s[0] = sn[0] / q.det;
+  s[1] = sn[1] / q.det;
+  for (long j = 1; j < sc->np && (double)j * sc->h < t[0]; j++) {
+    const slip_map *Sj = &sc->S[j * sc->stride];
+    double g = Sj->Y[3][0] * s[0] + Sj->Y[3][1] * s[1] + Sj->y[3] - V;
+    if (g > tol)
+      return g;
+  }
+  for (int i = 0; i < 4; i++)
+    x[i] = S.Y[i][0] * s[0] + S.Y[i][1] * s[1] + S.y[i];
+  double f = chi * (x[1] - x[0]), stick = t[1];
+  if (sc->n == 3) {
+    if (!(f <= -ur + tol)) {
+      *inside = 0;
+      return f + ur;
+    }
+    for (long j = 1; j < sc->np && (double)j * sc->h < t[1]; j++) {
+      const over_map *Oj = &sc->O[j * sc->stride];
+      double v = Oj->g[3];
+      for (int l = 0; l < 4; l++)
+        v += Oj->G[3][l] * x[l];
+      if (V - v > tol)
+        return V - v;
+    }
+    for (int i = 0; i < 4; i++) {
+      y[i] = O.g[i];
+      for (int l = 0; l < 4; l++)
+        y[i] += O.G[i][l] * x[l];
+    }
+    memcpy(x, y, sizeof x);
+    f = chi * (x[1] - x[0]);
+    stick = t3;
+  }
+  if (!(fabs(f) <= ur + tol)) {
+    *inside = 0;
+    return fabs(f) - ur;
+  }
+  /* the stick: x2 = x2(0) + V t, x1 - chi x2 = Ac cos t + Bc sin t */
+  double Ac = x[0] - chi * x[1], Bc = x[2] - chi * V;
+  for (double u = sc->h; u < stick; u += sc->h) {
+    double fu = chi * ((1 - chi) * (x[1] + V * u) - Ac * cos(u) - Bc * sin(u));
+    if (fabs(fu) > ur + tol)
+      return fabs(fu) - ur;
+  }
+  return 0;
+}
+
+/* Newton from the centre of a candidate cell of size h, on det * R: near
+ * a pole of R (the system for s singular close by) R itself turns Newton
+ * away.  1 if it converged (the root kept, or rejected, or known); -1 if
+ * it stepped out of reach of the cell (the cell too coarse a model). */
+static int newton(scan *sc, double t1, double t2, double h) {
+  const ss_model *m = sc->m;
+  double t[2] = {t1, t2}, R[2], det = 0, t3 = 0;
+  sc->newton++;
+  int ok = 0;
+  for (int it = 0; it < SCAN_NEWTON_ITERS && !ok; it++) {
+    if (reduced(m, sc->n, t, R, &det, &t3))
+      return 0;
+    /* forward differences: the root is polished by ss_orbit_solve() */
+    double J[2][2];
+    for (int j = 0; j < 2; j++) {
+      double e = 1e-7 * fmax(1, t[j]), tp[2] = {t[0], t[1]}, Rp[2], u, v;
+      tp[j] += e;
+      if (reduced(m, sc->n, tp, Rp, &u, &v))
+        return 0;
+      J[0][j] = (Rp[0] - R[0]) / e;
+      J[1][j] = (Rp[1] - R[1]) / e;
+    }
+    double dj = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+    if (!(dj != 0) || !isfinite(dj))
+      return 0;
+    double d0 = -(J[1][1] * R[0] - J[0][1] * R[1]) / dj;
+    double d1 = -(J[0][0] * R[1] - J[1][0] * R[0]) / dj;
+    double len = hypot(d0, d1);
+    /* a root in the cell is within a step or so of its centre */
+    if (len > 3 * h)
+      return -1;
+    t[0] += d0;
+    t[1] += d1;
+    if (!(t[0] > 0 && t[1] > 0))
+      return 0;
+    ok = len < 1e-10 * (1 + t[0] + t[1]);
+    /* from inside its cell Newton reaches a root in a few steps */
+    if (!ok && it >= SCAN_NEWTON_ITERS / 2 && len > 1e-6 * h)
+      return 0;
+  }
+  if (reduced(m, sc->n, t, R, &det, &t3) ||
+      !(fabs(R[0]) + fabs(R[1]) < 1e-8 * sc->scale * fabs(det)))
+    return 0;
+  double lim = sc->dmax * (1 + 1e-12);
+  if (!(t[0] <= lim && t[1] <= lim) || (sc->n == 3 && !(t3 > 0 && t3 <= lim)))
+    return 1;
+  int inside;
+  double bad = implausible(sc, t, t3, &inside);
+  if (bad > 0) {
+    /* the closest of them, of those failing inside a phase and of those
+     * failing at a phase's end, for a report of why there is no orbit */
+    if (!(bad >= sc->rejected_by[inside])) {
+      sc->rejected_by[inside] = bad;
+      sc->rejected[inside][0] = t[0];
+      sc->rejected[inside][1] = t[1];
+      sc->rejected[inside][2] = t3;
+    }
+    return 1;
+  }
+  for (int i = 0; i < sc->count; i++)
+    if (fabs(sc->roots[i][0] - t[0]) + fabs(sc->roots[i][1] - t[1]) <
+        1e-7 * (1 + t[0] + t[1]))
+      return 1;
+  if (sc->count < sc->max) {
+    sc->roots[sc->count][0] = t[0];
+    sc->roots[sc->count][1] = t[1];
+    sc->roots[sc->count][2] = t3;
+  }
+  sc->count++;
+  return 1;
+}
+
+/* Does each component's corner values reach zero within half their
+ * spread?  0: no; 1: both change sign; 2: not both, but the plane through
+ * the corners puts the zero within two cells of the centre (Newton's first
+ * step, nearly). */
+static int candidate(const point *c[4]) {
+  int strict = 1;
+  for (int r = 0; r < 2; r++) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (int k = 0; k < 4; k++) {
+      double v = c[k]->Rn[r];
+      if (!isfinite(v))
+        return 0;
+      lo = fmin(lo, v);
+      hi = fmax(hi, v);
+    }
+    double spread = hi - lo;
+    if (lo > 0.5 * spread || hi < -0.5 * spread)
+      return 0;
+    strict = strict && lo <= 0 && hi >= 0;
+  }
+  if (strict)
+    return 1;
+  double f[2], g1[2], g2[2];
+  for (int r = 0; r < 2; r++) {
+    f[r] = 0.25 * (c[0]->Rn[r] + c[1]->Rn[r] + c[2]->Rn[r] + c[3]->Rn[r]);
+    g1[r] = 0.5 * (c[2]->Rn[r] + c[3]->Rn[r] - c[0]->Rn[r] - c[1]->Rn[r]);
+    g2[r] = 0.5 * (c[1]->Rn[r] + c[3]->Rn[r] - c[0]->Rn[r] - c[2]->Rn[r]);
+  }
+  double det = g1[0] * g2[1] - g2[0] * g1[1];
+  if (!(det != 0))
+    return 2;
+  double u = -(f[0] * g2[1] - g2[0] * f[1]) / det;
+  double v = -(g1[0] * f[1] - f[0] * g1[1]) / det;
+  return fabs(u) <= 2 && fabs(v) <= 2 ? 2 : 0;
+}
+
+/* A candidate cell [a1, b1] x [a2, b2], corners c as for cell_sos: Newton
+ * from its centre; where both components change sign in it and Newton's
+ * step leaves the cell's reach (two zero lines crossing at a small angle,
+ * for which the cell is too coarse a model), the same in its quarters, down
+ * to 1/8. */
+static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
+                     const point *c[4], int depth) {
+  int k = candidate(c);
+  if (!k || newton(sc, 0.5 * (a1 + b1), 0.5 * (a2 + b2), b1 - a1) != -1 ||
+      k != 1 || depth == SCAN_REFINE)
+    return;
+  double m1 = 0.5 * (a1 + b1), m2 = 0.5 * (a2 + b2);
+  point e[5]; /* (a1, m2) (m1, a2) (m1, m2) (m1, b2) (b1, m2) */
+  eval_at(sc->m, sc->n, a1, m2, &e[0]);
+  eval_at(sc->m, sc->n, m1, a2, &e[1]);
+  eval_at(sc->m, sc->n, m1, m2, &e[2]);
+  eval_at(sc->m, sc->n, m1, b2, &e[3]);
+  eval_at(sc->m, sc->n, b1, m2, &e[4]);
+  const point *q[4][4] = {{c[0], &e[0], &e[1], &e[2]},
+                          {&e[0], c[1], &e[2], &e[3]},
+                          {&e[1], &e[2], c[2], &e[4]},
+                          {&e[2], &e[3], &e[4], c[3]}};
+  try_cell(sc, a1, m1, a2, m2, q[0], depth + 1);
+  try_cell(sc, a1, m1, m2, b2, q[1], depth + 1);
+  try_cell(sc, m1, b1, a2, m2, q[2], depth + 1);
+  try_cell(sc, m1, b1, m2, b2, q[3], depth + 1);
+}
+
+/* A slip-overshoot-stick cell [i1, k1] x [i2, k2] in fine steps, corners
+ * c: (i1, i2), (i1, k2), (k1, i2), (k1, k2). */
+static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
+                     const point *c0, const point *c1, const point *c2,
+                     const point *c3) {
+  const point *c[4] = {c0, c1, c2, c3};
+  double lo = INFINITY, hi = -INFINITY, dm = sc->dmax;
+  int pos = 0, neg = 0, near = 0;
+  for (int k = 0; k < 4; k++) {
+    double t3 = c[k]->t3;
+    pos |= c[k]->det > 0;
+    neg |= !(c[k]->det > 0);
+    if (isfinite(t3)) {
+      lo = fmin(lo, t3);
+      hi = fmax(hi, t3);
+      near |= t3 > -0.5 && t3 < dm + 0.5;
+    }
+  }
+  int across = pos && neg;
+  /* nowhere near the box, and no pole through the cell */
+  if (!near && !across)
+    return;
+  /* away from a pole, E must reach zero in the cell */
+  if (!across) {
+    double elo = INFINITY, ehi = -INFINITY;
+    for (int k = 0; k < 4; k++) {
+      elo = fmin(elo, c[k]->E);
+      ehi = fmax(ehi, c[k]->E);
+    }
+    if (isfinite(elo) && isfinite(ehi) &&
+        (elo > 0.5 * (ehi - elo) || ehi < -0.5 * (ehi - elo)))
+      return;
+  }
+  double hf = sc->h / (double)sc->stride;
+  if (across || !(hi - lo <= SCAN_T3_TURN)) {
+    if (k1 - i1 < 2)
+      return;
+    long m1 = (i1 + k1) / 2, m2 = (i2 + k2) / 2;
+    const slip_map *S = sc->S;
+    const over_map *O = sc->O;
+    point e[5]; /* (i1, m2) (m1, i2) (m1, m2) (m1, k2) (k1, m2) */
+    double sn[2];
+    eval_sos(sc->m, &S[i1], &O[m2], dm, &e[0], sn);
+    eval_sos(sc->m, &S[m1], &O[i2], dm, &e[1], sn);
+    eval_sos(sc->m, &S[m1], &O[m2], dm, &e[2], sn);
+    eval_sos(sc->m, &S[m1], &O[k2], dm, &e[3], sn);
+    eval_sos(sc->m, &S[k1], &O[m2], dm, &e[4], sn);
+    cell_sos(sc, i1, m1, i2, m2, c0, &e[0], &e[1], &e[2]);
+    cell_sos(sc, i1, m1, m2, k2, &e[0], c1, &e[2], &e[3]);
+    cell_sos(sc, m1, k1, i2, m2, &e[1], &e[2], c2, &e[4]);
+    cell_sos(sc, m1, k1, m2, k2, &e[2], &e[3], &e[4], c3);
+    return;
+  }
+  if (!(lo > -0.5 && hi < dm + 0.5))
+    return;
+  try_cell(sc, (double)i1 * hf, (double)k1 * hf, (double)i2 * hf,
+           (double)k2 * hf, c, 0);
+}
+
+int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
+                     double (*roots)[3], int max_roots, int *n_roots,
+                     double (*rejected)[3], int *n_rejected, int *newton_starts,
+                     int (*stop)(void *), void *stop_cls) {
+  *n_roots = 0;
+  *n_rejected = 0;
+  if ((n != 2 && n != 3) || !(dmax > 0) || !(h > 0))
+    return SS_EINVAL;
+  double cells = ceil(dmax / h);
+  long N = cells < 8                ? 8
+           : cells > SCAN_MAX_CELLS ? SCAN_MAX_CELLS
+                                    : (long)cells;
+  h = dmax / (double)N;
+  long np = N + 1, stride = n == 3 ? 1L << SCAN_MAX_DEPTH : 1;
+  long nf = N * stride + 1;
+  slip_map *S = malloc((size_t)nf * sizeof *S);
+  over_map *O = n == 3 ? malloc((size_t)nf * sizeof *O) : NULL;
+  point *row = malloc(2 * (size_t)np * sizeof *row);
+  double(*cs)[2] = malloc((size_t)np * sizeof *cs);
+  if (!S || (n == 3 && !O) || !row || !cs) {
+    free(S);
+    free(O);
+    free(row);
+    free(cs);
+    return SS_ENOMEM;
+  }
+  for (long j = 0; j < np; j++) {
+    cs[j][0] = cos((double)j * h);
+    cs[j][1] = sin((double)j * h);
+  }
+  const ss_params *p = &m->p;
+  scan sc = {m,
+             n,
+             dmax,
+             fmax(p->V, (p->ur - p->us) / p->chi),
+             h,
+             np,
+             stride,
+             S,
+             O,
+             roots,
+             max_roots,
+             0,
+             0,
+             {{0, 0, 0}, {0, 0, 0}},
+             {INFINITY, INFINITY}};
+  for (long i = 0; i < nf; i++) {
+    double t = (double)i * h / (double)stride;
+    slip_at(m, t, &S[i]);
+    if (O)
+      over_at(m, t, &O[i]);
+  }
+  /* rows t1 = i h; the first row of cells (t1 < h) is degenerate: at
+   * t1 = 0 the slip's end condition holds for every s */
+  int rc = SS_OK;
+  for (long i = 1; i < np && rc == SS_OK; i++) {
+    if (stop && stop(stop_cls))
+      rc = SS_ECANCELED;
+    point *cur = row + (i & 1) * np, *prv = row + ((i + 1) & 1) * np;
+    for (long j = 0; j < np; j++) {
+      double sn[2];
+      if (n == 2)
+        eval_ss(m, &S[i], (double)j * h, cs[j][0], cs[j][1], &cur[j], sn);
+      else
+        eval_sos(m, &S[i * stride], &O[j * stride], dmax, &cur[j], sn);
+    }
+    if (i < 2)
+      continue;
+    for (long j = n == 2 ? 0 : 1; j < N; j++) {
+      if (n == 3) {
+        cell_sos(&sc, (i - 1) * stride, i * stride, j * stride,
+                 (j + 1) * stride, &prv[j], &prv[j + 1], &cur[j], &cur[j + 1]);
+      } else {
+        const point *c[4] = {&prv[j], &prv[j + 1], &cur[j], &cur[j + 1]};
+        try_cell(&sc, (double)(i - 1) * h, (double)i * h, (double)j * h,
+                 (double)(j + 1) * h, c, 0);
+      }
+    }
+  }
+  free(S);
+  free(O);
+  free(row);
+  free(cs);
+  *n_roots = sc.count < max_roots ? sc.count : max_roots;
+  for (int k = 0; k < 2; k++)
+    if (isfinite(sc.rejected_by[k]))
+      memcpy(rejected[(*n_rejected)++], sc.rejected[k], sizeof sc.rejected[k]);
+  if (newton_starts)
+    *newton_starts += sc.newton;
+  return rc;
+}

@@ -1,0 +1,243 @@
+/*
+ * test_search.c: the default orbit search finds every slip-stick and
+ * slip-overshoot-stick orbit that an independent brute-force search finds.
+ *
+ * On random parameter sets (chi 0.05-0.9, eta 0.2-20 and ur/us 1.5-20
+ * log-uniform, us 0.02-0.3, V = 1) tests/ref/brute.c solves the two
+ * families' duration equations from a dense grid over every duration in
+ * (0, dmax], dmax = 1.5 slow modal periods, and keeps each root that its own
+ * event-driven simulation confirms.  Each of them must be among the orbits
+ * the default search returns (same sequence, durations within 1e-6, and
+ * spectral radii within 1e-4); each orbit of those families the search
+ * returns with every duration within the box must be one of them.  Counts,
+ * misses and times are printed.
+ * Usage: test_search [first [sets]]   (default: 40 sets from the first,
+ * set 0; the environment variable SS_SEARCH_SETS, if set, takes at most
+ * that many: the sanitizer and shared-library runs take a few)
+ */
+#define _POSIX_C_SOURCE 199309L
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <gsl/gsl_errno.h>
+
+#include "brute.h"
+#include "stickslip.h"
+#include "test.h"
+
+#define MAXO 128
+#define MAXB 64
+
+static uint64_t rng = 0x2545f4914f6cdd1du;
+static double unif(double a, double b) {
+  rng ^= rng >> 12;
+  rng ^= rng << 25;
+  rng ^= rng >> 27;
+  return a + (b - a) * (double)((rng * 2685821657736338717u) >> 11) * 0x1p-53;
+}
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* Is search orbit o the brute-force orbit b? */
+static int same(const ss_orbit *o, const brute_orbit *b) {
+  if (o->n_turns != 1 || o->n_phases != b->n_phases)
+    return 0;
+  static const ss_mode seq[2][3] = {
+      {SS_MODE_SLIP, SS_MODE_STICK, SS_MODE_STICK},
+      {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK}};
+  for (int k = 0; k < b->n_phases; k++)
+    if (o->modes[k] != seq[b->n_phases - 2][k] ||
+        fabs(o->durations[k] - b->dur[k]) > 1e-6 * (1 + b->period))
+      return 0;
+  return 1;
+}
+
+/* brute_orbits(), or its answer for set s from the file named by the
+ * environment variable SS_BRUTE_CACHE (written there when absent): for
+ * trying changes to the search without waiting for the brute force. */
+static int cached_brute(const brute_params *bp, double dmax, brute_orbit *bo,
+                        int max, int s) {
+  const char *dir = getenv("SS_BRUTE_CACHE");
+  char path[512];
+  if (dir) {
+    snprintf(path, sizeof path, "%s/set%d.bin", dir, s);
+    FILE *f = fopen(path, "rb");
+    if (f) {
+      int n = 0;
+      if (fread(&n, sizeof n, 1, f) != 1 || n < 0 || n > max ||
+          fread(bo, sizeof *bo, (size_t)n, f) != (size_t)n)
+        n = -1;
+      fclose(f);
+      return n;
+    }
+  }
+  int n = brute_orbits(bp, dmax, bo, max);
+  if (dir && n >= 0) {
+    FILE *f = fopen(path, "wb");
+    if (f) {
+      fwrite(&n, sizeof n, 1, f);
+      fwrite(bo, sizeof *bo, (size_t)n, f);
+      fclose(f);
+    }
+  }
+  return n;
+}
+
+/* A search whose scan would take over a second (chi = eta = 0.01: the slow
+ * period is 630, the box 940 wide, at 1000 cells a side) stops within its
+ * budget: the scan polls it once per row. */
+static void test_budget(void) {
+  ss_params p = {0.01, 0.01, 0.1, 1, 1};
+  ss_model m;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  ss_orbit_opts oo;
+  memset(&oo, 0, sizeof oo);
+  oo.max_seconds = 0.05;
+  oo.kinds = SS_ORBIT_OVERSHOOT;
+  static ss_orbit out[MAXO];
+  int n = 0;
+  double t0 = now();
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, out, MAXO, &n, NULL, NULL),
+                SS_ELIMIT_TIME);
+  double t = now() - t0;
+  printf("budget 0.05 s: the search stopped after %.3f s\n", t);
+  ASSERT_TRUE(t < 0.5);
+}
+
+int main(int argc, char **argv) {
+  const char *env = getenv("SS_SEARCH_SETS");
+  int first = argc > 1 ? atoi(argv[1]) : 0;
+  int sets = argc > 2 ? atoi(argv[2]) : 40;
+  if (env && atoi(env) > 0 && atoi(env) < sets)
+    sets = atoi(env);
+  gsl_set_error_handler_off();
+  test_budget();
+  int total = 0, stable = 0, missed = 0, missed_stable = 0, extra = 0;
+  int radius_off = 0;
+  double *times = malloc((size_t)(sets > 0 ? sets : 1) * sizeof *times);
+  double brute_time = 0;
+  /* before the random sets of the first half: the issue's example (a
+   * stick-slip orbit of durations about [5.64122, 0.55821] that the former
+   * search missed at every effort), and the paper's parameters */
+  static const ss_params fixed[] = {{0.2759, 0.3357, 0.1833, 1.0572, 1},
+                                    {0.2, 4, 0.0724, 0.6178, 1}};
+  int n_fixed = first == 0 ? 2 : 0;
+  for (int s = -n_fixed; s < first + sets; s++) {
+    ss_params p;
+    if (s < 0) {
+      p = fixed[s + n_fixed];
+    } else {
+      p.chi = unif(0.05, 0.9);
+      p.eta = exp(unif(log(0.2), log(20)));
+      p.us = unif(0.02, 0.3);
+      p.ur = p.us * exp(unif(log(1.5), log(20)));
+      p.V = 1;
+    }
+    if (s >= 0 && s < first)
+      continue;
+    brute_params bp = {p.chi, p.eta, p.us, p.ur, p.V};
+    double dmax = brute_dmax(&bp);
+    brute_orbit bo[MAXB];
+    double t0 = now();
+    int nb = cached_brute(&bp, dmax, bo, MAXB, s);
+    double tb = now() - t0;
+    brute_time += tb;
+    printf("set %d: chi %.4f eta %.4f us %.4f ur %.4f: brute force %.2f s\n", s,
+           p.chi, p.eta, p.us, p.ur, tb);
+    fflush(stdout);
+    ASSERT_TRUE(nb >= 0 && nb <= MAXB);
+    if (nb < 0)
+      continue;
+
+    ss_model m;
+    ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+    ss_orbit_opts oo;
+    memset(&oo, 0, sizeof oo);
+    static ss_orbit out[MAXO];
+    int n = 0;
+    t0 = now();
+    ASSERT_EQ_INT(ss_orbit_find(&m, &oo, out, MAXO, &n, NULL, NULL), SS_OK);
+    double ts = now() - t0;
+    if (s >= 0)
+      times[s - first] = ts;
+    printf("set %d: %d orbits by brute force, %d by the search (%.2f ms)\n", s,
+           nb, n, 1e3 * ts);
+    fflush(stdout);
+
+    for (int i = 0; i < nb; i++) {
+      total++;
+      int st = bo[i].radius < 1 - 1e-4;
+      stable += st;
+      int found = -1;
+      for (int o = 0; o < n && found < 0; o++)
+        if (same(&out[o], &bo[i]))
+          found = o;
+      if (found < 0) {
+        missed++;
+        missed_stable += st;
+        printf("missed: set %d {\"chi\": %.17g, \"eta\": %.17g, \"us\": "
+               "%.17g, \"ur\": %.17g}: %s durations [%.9g, %.9g, %.9g] "
+               "radius %.6f margin %.3g\n",
+               s, p.chi, p.eta, p.us, p.ur,
+               bo[i].n_phases == 2 ? "slip-stick" : "slip-overshoot-stick",
+               bo[i].dur[0], bo[i].dur[1],
+               bo[i].n_phases == 3 ? bo[i].dur[2] : 0.0, bo[i].radius,
+               bo[i].margin);
+      } else if (fabs(out[found].stab.spectral_radius - bo[i].radius) >
+                 1e-4 * fmax(1, bo[i].radius)) {
+        radius_off++;
+        printf("radius: set %d: search %.9g, brute force %.9g\n", s,
+               out[found].stab.spectral_radius, bo[i].radius);
+      }
+    }
+    /* the other way round: within the box, nothing the brute force lacks */
+    for (int o = 0; o < n; o++) {
+      const ss_orbit *q = &out[o];
+      if (q->n_turns != 1 ||
+          (q->kind != SS_ORBIT_STICKSLIP && q->kind != SS_ORBIT_OVERSHOOT))
+        continue;
+      int inside = 1;
+      for (int k = 0; k < q->n_phases; k++)
+        inside = inside && q->durations[k] <= dmax;
+      if (!inside)
+        continue;
+      int found = 0;
+      for (int i = 0; i < nb && !found; i++)
+        found = same(q, &bo[i]);
+      if (!found) {
+        extra++;
+        printf("not in the brute force: set %d: %d phases, durations [%.9g, "
+               "%.9g, %.9g], min margin %.3g\n",
+               s, q->n_phases, q->durations[0], q->durations[1],
+               q->n_phases == 3 ? q->durations[2] : 0.0, q->min_margin.value);
+      }
+    }
+  }
+  if (sets > 0) {
+    qsort(times, (size_t)sets, sizeof *times, cmp_double);
+    printf("search: %d sets, %d orbits by brute force (%d stable), %d missed "
+           "by the default search (%d stable), %d returned that the brute "
+           "force lacks, %d radii off; search median %.2f ms, worst %.2f ms; "
+           "brute force %.1f s\n",
+           sets, total, stable, missed, missed_stable, extra, radius_off,
+           1e3 * times[sets / 2], 1e3 * times[sets - 1], brute_time);
+  }
+  ASSERT_EQ_INT(missed, 0);
+  ASSERT_EQ_INT(extra, 0);
+  ASSERT_EQ_INT(radius_off, 0);
+  free(times);
+  TEST_DONE();
+}
