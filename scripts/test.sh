@@ -13,9 +13,10 @@ for variant in release sanitize; do
   sets=()
   if [ "$variant" = sanitize ]; then
     extra=(-DCMAKE_BUILD_TYPE=Debug "-DSTICKSLIP_SANITIZE=address;undefined")
-    # the search battery's brute force is slow under the sanitizers: the
-    # optimised build runs all 40 sets, this one 2 of each half
-    sets=(SS_SEARCH_SETS=2)
+    # the search battery's brute force and the existence map are slow under
+    # the sanitizers: the optimised build runs all 40 sets and 50x50 cells,
+    # this one 2 sets of each half and 12x12 cells
+    sets=(SS_SEARCH_SETS=2 SS_EXISTENCE_N=12)
   else
     extra=(-DCMAKE_BUILD_TYPE=RelWithDebInfo)
   fi
@@ -34,7 +35,7 @@ cmake -S . -B build-test-shared -DSTICKSLIP_WERROR=ON -DSTICKSLIP_BUILD_TESTS=ON
   -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build build-test-shared -j"$jobs"
 echo "== shared library tests"
-(cd build-test-shared && SS_SEARCH_SETS=4 ctest --output-on-failure -j"$jobs" -R '^(core_|readme_)')
+(cd build-test-shared && SS_SEARCH_SETS=4 SS_EXISTENCE_N=12 ctest --output-on-failure -j"$jobs" -R '^(core_|readme_)')
 if command -v clang-format >/dev/null; then
   echo "== format check"
   cmake --build build-test-release --target format-check

@@ -24,14 +24,15 @@
  * (where not both change sign, the plane through the corners must also put
  * the zero within two cells).  For slip-overshoot-stick t3 is not smooth
  * where the system is singular: a cell across which the determinant changes
- * sign or t3 turns by more than 0.5 rad is split, up to 4 times finer; a
+ * sign or t3 turns by more than 1 rad is split, up to 8 times finer (and
+ * then tried as it is, unless a pole crosses it); a
  * cell whose corners do not all give t3 in (-0.5, dmax + 0.5) cannot hold a
  * root with t3 in the box, and away from a pole neither can one where the
  * rotation condition E (below) stays away from zero.  Newton on the reduced
  * equations times det (forward differences) starts at the centre of each
  * candidate cell; where both components change sign and Newton's first step
- * leaves the cell's reach, the cell is split and each quarter tried again,
- * down to 1/8.  A root is kept if its phases, sampled on the grid and at
+ * leaves the cell's reach, a slip-stick cell is split and each quarter tried
+ * again, down to 1/8.  A root is kept if its phases, sampled on the grid and at
  * their ends, keep the rules of their modes (implausible()), once.
  */
 #include <math.h>
@@ -40,8 +41,8 @@
 
 #include "internal.h"
 
-#define SCAN_MAX_DEPTH 2
-#define SCAN_T3_TURN 0.5
+#define SCAN_MAX_DEPTH 3
+#define SCAN_T3_TURN 1.0
 #define SCAN_NEWTON_ITERS 16
 #define SCAN_MAX_CELLS 1000 /* per axis */
 #define SCAN_REFINE 3       /* halvings of a cell Newton fails in */
@@ -205,6 +206,7 @@ typedef struct scan {
   double (*roots)[3];
   int max, count;
   int newton; /* Newton starts */
+  int refine; /* halvings of a cell Newton leaves (try_cell) */
   /* the roots closest to passing implausible(), failing at a phase's end
    * [0] or inside a phase [1], and how far they fail (INFINITY: none) */
   double rejected[2][3], rejected_by[2];
@@ -398,7 +400,7 @@ static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
                      const point *c[4], int depth) {
   int k = candidate(c);
   if (!k || newton(sc, 0.5 * (a1 + b1), 0.5 * (a2 + b2), b1 - a1) != -1 ||
-      k != 1 || depth == SCAN_REFINE)
+      k != 1 || depth == sc->refine)
     return;
   double m1 = 0.5 * (a1 + b1), m2 = 0.5 * (a2 + b2);
   point e[5]; /* (a1, m2) (m1, a2) (m1, m2) (m1, b2) (b1, m2) */
@@ -451,7 +453,8 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
       return;
   }
   double hf = sc->h / (double)sc->stride;
-  if (across || !(hi - lo <= SCAN_T3_TURN)) {
+  /* split; at the finest level a cell with no pole is tried as it is */
+  if ((across || !(hi - lo <= SCAN_T3_TURN)) && (k1 - i1 >= 2 || across)) {
     if (k1 - i1 < 2)
       return;
     long m1 = (i1 + k1) / 2, m2 = (i2 + k2) / 2;
@@ -507,21 +510,19 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
     cs[j][1] = sin((double)j * h);
   }
   const ss_params *p = &m->p;
-  scan sc = {m,
-             n,
-             dmax,
-             fmax(p->V, (p->ur - p->us) / p->chi),
-             h,
-             np,
-             stride,
-             S,
-             O,
-             roots,
-             max_roots,
-             0,
-             0,
-             {{0, 0, 0}, {0, 0, 0}},
-             {INFINITY, INFINITY}};
+  scan sc = {.m = m,
+             .n = n,
+             .dmax = dmax,
+             .scale = fmax(p->V, (p->ur - p->us) / p->chi),
+             .h = h,
+             .np = np,
+             .stride = stride,
+             .S = S,
+             .O = O,
+             .roots = roots,
+             .max = max_roots,
+             .refine = n == 2 ? SCAN_REFINE : 0,
+             .rejected_by = {INFINITY, INFINITY}};
   for (long i = 0; i < nf; i++) {
     double t = (double)i * h / (double)stride;
     slip_at(m, t, &S[i]);
