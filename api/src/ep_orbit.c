@@ -209,6 +209,14 @@ static json_t *search_json(const orbit_x *x) {
   api__set(se, "infeasible", json_integer(rep->infeasible));
   api__set(se, "duplicates", json_integer(rep->duplicates));
   api__set(se, "truncated", json_integer(rep->truncated));
+  /* what "every orbit of the two period-1 families" covered */
+  if (rep->scan_box > 0) {
+    json_t *sc = json_object();
+    api__set(sc, "max_duration",
+             api__real(api__time_out(&x->ap, rep->scan_box)));
+    api__set(sc, "step", api__real(api__time_out(&x->ap, rep->scan_step)));
+    api__set(se, "scan", sc);
+  }
   return se;
 }
 

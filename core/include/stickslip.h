@@ -642,7 +642,13 @@ typedef struct ss_orbit_report {
   int infeasible;    /**< roots rejected as physically inadmissible */
   int duplicates;    /**< roots already found */
   int truncated;     /**< more orbits than room in the output */
-  char reason[256];  /**< why nothing was found, or the closest rejection */
+  /** The scan of the slip-stick and slip-overshoot-stick duration equations:
+   *  every root with each duration in (0, scan_box] on a grid of step
+   *  scan_step (both 0 when there was no scan: from a guess, or neither
+   *  family asked for).  Orbits of those families outside the box, and of
+   *  other sequences, come only from simulation and Newton starts. */
+  double scan_box, scan_step;
+  char reason[256]; /**< why nothing was found, or the closest rejection */
   /** The rejected root closest to feasible (largest violation.value), with
    *  its margins, when a root was rejected. */
   int has_rejected;

@@ -45,14 +45,15 @@ double ss__now(void); /* monotonic seconds */
  * the others, the one closest to the rules of its phases among those that
  * fail at a phase's end, and among those that fail inside a phase, into
  * rejected (*n_rejected of them, 0 to 2).  The Newton starts are added to
- * *newton_starts.  The step is widened to keep at most 1000 cells a side.
+ * *newton_starts.  The step is widened to keep at most 1000 cells a side;
+ * the step used into *step.
  * stop (if not NULL) is polled once per row of the grid: a non-zero answer
  * ends the scan with SS_ECANCELED and what it found so far.
  * SS_OK, SS_EINVAL, SS_ENOMEM or SS_ECANCELED. */
 int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
                      double (*roots)[3], int max_roots, int *n_roots,
                      double (*rejected)[3], int *n_rejected, int *newton_starts,
-                     int (*stop)(void *), void *stop_cls);
+                     double *step, int (*stop)(void *), void *stop_cls);
 
 /* Whether the sequence (n phases, durations tau) is a shorter one repeated
  * two or more times, durations equal within @a tol: the same orbit

@@ -30,10 +30,10 @@
  * root with t3 in the box, and away from a pole neither can one where the
  * rotation condition E (below) stays away from zero.  Newton on the reduced
  * equations times det (forward differences) starts at the centre of each
- * candidate cell; where both components change sign and Newton's first step
- * leaves the cell's reach, a slip-stick cell is split and each quarter tried
- * again, down to 1/8.  A root is kept if its phases, sampled on the grid and at
- * their ends, keep the rules of their modes (implausible()), once.
+ * candidate cell; where Newton's first step leaves the cell's reach, the
+ * cell is split and each quarter tried again, down to 1/8.  A root is kept if
+ * its phases, sampled on the grid and at their ends, keep the rules of their
+ * modes (implausible()), once.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -206,7 +206,6 @@ typedef struct scan {
   double (*roots)[3];
   int max, count;
   int newton; /* Newton starts */
-  int refine; /* halvings of a cell Newton leaves (try_cell) */
   /* the roots closest to passing implausible(), failing at a phase's end
    * [0] or inside a phase [1], and how far they fail (INFINITY: none) */
   double rejected[2][3], rejected_by[2];
@@ -392,15 +391,15 @@ static int candidate(const point *c[4]) {
 }
 
 /* A candidate cell [a1, b1] x [a2, b2], corners c as for cell_sos: Newton
- * from its centre; where both components change sign in it and Newton's
- * step leaves the cell's reach (two zero lines crossing at a small angle,
- * for which the cell is too coarse a model), the same in its quarters, down
- * to 1/8. */
+ * from its centre; where Newton's step leaves the cell's reach (two zero
+ * lines crossing at a small angle, or curving fast near a pole: the cell is
+ * too coarse a model), the same in its quarters, up to refine more
+ * halvings. */
 static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
-                     const point *c[4], int depth) {
+                     const point *c[4], int refine) {
   int k = candidate(c);
   if (!k || newton(sc, 0.5 * (a1 + b1), 0.5 * (a2 + b2), b1 - a1) != -1 ||
-      k != 1 || depth == sc->refine)
+      refine == 0)
     return;
   double m1 = 0.5 * (a1 + b1), m2 = 0.5 * (a2 + b2);
   point e[5]; /* (a1, m2) (m1, a2) (m1, m2) (m1, b2) (b1, m2) */
@@ -413,10 +412,10 @@ static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
                           {&e[0], c[1], &e[2], &e[3]},
                           {&e[1], &e[2], c[2], &e[4]},
                           {&e[2], &e[3], &e[4], c[3]}};
-  try_cell(sc, a1, m1, a2, m2, q[0], depth + 1);
-  try_cell(sc, a1, m1, m2, b2, q[1], depth + 1);
-  try_cell(sc, m1, b1, a2, m2, q[2], depth + 1);
-  try_cell(sc, m1, b1, m2, b2, q[3], depth + 1);
+  try_cell(sc, a1, m1, a2, m2, q[0], refine - 1);
+  try_cell(sc, a1, m1, m2, b2, q[1], refine - 1);
+  try_cell(sc, m1, b1, a2, m2, q[2], refine - 1);
+  try_cell(sc, m1, b1, m2, b2, q[3], refine - 1);
 }
 
 /* A slip-overshoot-stick cell [i1, k1] x [i2, k2] in fine steps, corners
@@ -476,13 +475,13 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
   if (!(lo > -0.5 && hi < dm + 0.5))
     return;
   try_cell(sc, (double)i1 * hf, (double)k1 * hf, (double)i2 * hf,
-           (double)k2 * hf, c, 0);
+           (double)k2 * hf, c, SCAN_REFINE);
 }
 
 int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
                      double (*roots)[3], int max_roots, int *n_roots,
                      double (*rejected)[3], int *n_rejected, int *newton_starts,
-                     int (*stop)(void *), void *stop_cls) {
+                     double *step, int (*stop)(void *), void *stop_cls) {
   *n_roots = 0;
   *n_rejected = 0;
   if ((n != 2 && n != 3) || !(dmax > 0) || !(h > 0))
@@ -492,6 +491,7 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
            : cells > SCAN_MAX_CELLS ? SCAN_MAX_CELLS
                                     : (long)cells;
   h = dmax / (double)N;
+  *step = h;
   long np = N + 1, stride = n == 3 ? 1L << SCAN_MAX_DEPTH : 1;
   long nf = N * stride + 1;
   slip_map *S = malloc((size_t)nf * sizeof *S);
@@ -521,7 +521,6 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
              .O = O,
              .roots = roots,
              .max = max_roots,
-             .refine = n == 2 ? SCAN_REFINE : 0,
              .rejected_by = {INFINITY, INFINITY}};
   for (long i = 0; i < nf; i++) {
     double t = (double)i * h / (double)stride;
@@ -552,7 +551,7 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
       } else {
         const point *c[4] = {&prv[j], &prv[j + 1], &cur[j], &cur[j + 1]};
         try_cell(&sc, (double)(i - 1) * h, (double)i * h, (double)j * h,
-                 (double)(j + 1) * h, c, 0);
+                 (double)(j + 1) * h, c, SCAN_REFINE);
       }
     }
   }

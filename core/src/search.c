@@ -443,7 +443,8 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
       int nr = 0, n_rejected = 0, before = c.n;
       int rc = ss__scan_period1(m, 2 + f, dmax, h, roots, SCAN_MAX_ROOTS, &nr,
                                 rejected, &n_rejected, &rep->newton_starts,
-                                scan_stop, &c);
+                                &rep->scan_step, scan_stop, &c);
+      rep->scan_box = dmax;
       if (rc == SS_ENOMEM)
         return ss__fail(d, rc, "", 0, "out of memory in the orbit search");
       for (int r = 0; r < nr && !over_budget(&c); r++) {

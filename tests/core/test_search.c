@@ -117,6 +117,47 @@ static void test_budget(void) {
   ASSERT_TRUE(t < 0.5);
 }
 
+/* The report says which box the scan covered, and at which step: 1.5 slow
+ * modal periods at 0.3 rad of the fastest motion, the step widened to keep
+ * 1000 cells a side; nothing when there was no scan. */
+static void test_scan_report(void) {
+  const double two_pi = 6.283185307179586;
+  ss_params ps[2] = {{0.2, 4, 0.0724, 0.6178, 1}, {0.01, 0.01, 0.1, 1, 1}};
+  static ss_orbit out[MAXO];
+  for (int i = 0; i < 2; i++) {
+    ss_model m;
+    ASSERT_EQ_INT(ss_model_init(&m, &ps[i], NULL), SS_OK);
+    ss_orbit_opts oo;
+    memset(&oo, 0, sizeof oo);
+    oo.kinds = SS_ORBIT_STICKSLIP;
+    ss_orbit_report rep;
+    int n = 0;
+    ASSERT_EQ_INT(ss_orbit_find(&m, &oo, out, MAXO, &n, &rep, NULL), SS_OK);
+    double box = 1.5 * two_pi / m.w[0];
+    ASSERT_NEAR(rep.scan_box, box, 1e-12 * box);
+    double step = 0.3 / fmax(m.w[1], 1);
+    if (i == 0) /* the box a whole number of steps */
+      ASSERT_NEAR(rep.scan_step, box / ceil(box / step), 1e-15 * box);
+    else /* 940 wide: 1000 cells */
+      ASSERT_NEAR(rep.scan_step, box / 1000, 1e-15 * box);
+    printf("scan: box %.6g, step %.6g (%.0f cells a side)\n", rep.scan_box,
+           rep.scan_step, rep.scan_box / rep.scan_step);
+    if (i)
+      continue;
+    /* from a guess, or for other sequences only: no scan */
+    oo.kinds = SS_ORBIT_OTHER;
+    ASSERT_EQ_INT(ss_orbit_find(&m, &oo, out, MAXO, &n, &rep, NULL), SS_OK);
+    ASSERT_TRUE(rep.scan_box == 0 && rep.scan_step == 0);
+    oo.kinds = 0;
+    oo.n_guess = 3;
+    oo.guess[0] = 4.5;
+    oo.guess[1] = 2.7;
+    oo.guess[2] = 3.0;
+    ASSERT_EQ_INT(ss_orbit_find(&m, &oo, out, MAXO, &n, &rep, NULL), SS_OK);
+    ASSERT_TRUE(rep.scan_box == 0 && rep.scan_step == 0);
+  }
+}
+
 int main(int argc, char **argv) {
   const char *env = getenv("SS_SEARCH_SETS");
   int first = argc > 1 ? atoi(argv[1]) : 0;
@@ -125,6 +166,7 @@ int main(int argc, char **argv) {
     sets = atoi(env);
   gsl_set_error_handler_off();
   test_budget();
+  test_scan_report();
   int total = 0, stable = 0, missed = 0, missed_stable = 0, extra = 0;
   int radius_off = 0;
   double *times = malloc((size_t)(sets > 0 ? sets : 1) * sizeof *times);
