@@ -167,25 +167,53 @@ static void eval_sos(const ss_model *m, const slip_map *S, const over_map *O,
   closure(m, xd, sn, det, cos(q->t3), sin(q->t3), q);
 }
 
-static void eval_at(const ss_model *m, int n, double t1, double t2, point *q) {
-  slip_map S;
+/* The last two slip and overshoot maps off the grid: Newton's differences
+ * and a cell's refinement come back to the same times. */
+typedef struct maps {
+  const ss_model *m;
+  double ts[2], to[2]; /* their times (NAN: empty) */
+  slip_map S[2];
+  over_map O[2];
+  int next_s, next_o; /* the entry to replace next */
+} maps;
+
+static const slip_map *slip_cached(maps *mc, double t) {
+  for (int i = 0; i < 2; i++)
+    if (mc->ts[i] == t)
+      return &mc->S[i];
+  int i = mc->next_s;
+  mc->next_s = 1 - i;
+  mc->ts[i] = t;
+  slip_at(mc->m, t, &mc->S[i]);
+  return &mc->S[i];
+}
+
+static const over_map *over_cached(maps *mc, double t) {
+  for (int i = 0; i < 2; i++)
+    if (mc->to[i] == t)
+      return &mc->O[i];
+  int i = mc->next_o;
+  mc->next_o = 1 - i;
+  mc->to[i] = t;
+  over_at(mc->m, t, &mc->O[i]);
+  return &mc->O[i];
+}
+
+static void eval_at(maps *mc, int n, double t1, double t2, point *q) {
   double sn[2];
-  slip_at(m, t1, &S);
-  if (n == 2) {
-    eval_ss(m, &S, t2, cos(t2), sin(t2), q, sn);
-  } else {
-    over_map O;
-    over_at(m, t2, &O);
-    eval_sos(m, &S, &O, INFINITY, q, sn);
-  }
+  const slip_map *S = slip_cached(mc, t1);
+  if (n == 2)
+    eval_ss(mc->m, S, t2, cos(t2), sin(t2), q, sn);
+  else
+    eval_sos(mc->m, S, over_cached(mc, t2), INFINITY, q, sn);
 }
 
 /* The reduced residual at t, times det (smooth where R has a pole) into
  * Rn, and det; -1 where it is not finite. */
-static int reduced(const ss_model *m, int n, const double t[2], double Rn[2],
+static int reduced(maps *mc, int n, const double t[2], double Rn[2],
                    double *det, double *t3) {
   point q;
-  eval_at(m, n, t[0], t[1], &q);
+  eval_at(mc, n, t[0], t[1], &q);
   Rn[0] = q.Rn[0];
   Rn[1] = q.Rn[1];
   *det = q.det;
@@ -195,6 +223,7 @@ static int reduced(const ss_model *m, int n, const double t[2], double Rn[2],
 
 typedef struct scan {
   const ss_model *m;
+  maps mc;
   int n;       /* 2: slip-stick, 3: slip-overshoot-stick */
   double dmax; /* the box */
   double scale;
@@ -287,19 +316,18 @@ static double implausible(const scan *sc, const double t[2], double t3,
  * away.  1 if it converged (the root kept, or rejected, or known); -1 if
  * it stepped out of reach of the cell (the cell too coarse a model). */
 static int newton(scan *sc, double t1, double t2, double h) {
-  const ss_model *m = sc->m;
   double t[2] = {t1, t2}, R[2], det = 0, t3 = 0;
   sc->newton++;
   int ok = 0;
   for (int it = 0; it < SCAN_NEWTON_ITERS && !ok; it++) {
-    if (reduced(m, sc->n, t, R, &det, &t3))
+    if (reduced(&sc->mc, sc->n, t, R, &det, &t3))
       return 0;
     /* forward differences: the root is polished by ss_orbit_solve() */
     double J[2][2];
     for (int j = 0; j < 2; j++) {
       double e = 1e-7 * fmax(1, t[j]), tp[2] = {t[0], t[1]}, Rp[2], u, v;
       tp[j] += e;
-      if (reduced(m, sc->n, tp, Rp, &u, &v))
+      if (reduced(&sc->mc, sc->n, tp, Rp, &u, &v))
         return 0;
       J[0][j] = (Rp[0] - R[0]) / e;
       J[1][j] = (Rp[1] - R[1]) / e;
@@ -322,7 +350,7 @@ static int newton(scan *sc, double t1, double t2, double h) {
     if (!ok && it >= SCAN_NEWTON_ITERS / 2 && len > 1e-6 * h)
       return 0;
   }
-  if (reduced(m, sc->n, t, R, &det, &t3) ||
+  if (reduced(&sc->mc, sc->n, t, R, &det, &t3) ||
       !(fabs(R[0]) + fabs(R[1]) < 1e-8 * sc->scale * fabs(det)))
     return 0;
   double lim = sc->dmax * (1 + 1e-12);
@@ -403,11 +431,11 @@ static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
     return;
   double m1 = 0.5 * (a1 + b1), m2 = 0.5 * (a2 + b2);
   point e[5]; /* (a1, m2) (m1, a2) (m1, m2) (m1, b2) (b1, m2) */
-  eval_at(sc->m, sc->n, a1, m2, &e[0]);
-  eval_at(sc->m, sc->n, m1, a2, &e[1]);
-  eval_at(sc->m, sc->n, m1, m2, &e[2]);
-  eval_at(sc->m, sc->n, m1, b2, &e[3]);
-  eval_at(sc->m, sc->n, b1, m2, &e[4]);
+  eval_at(&sc->mc, sc->n, a1, m2, &e[0]);
+  eval_at(&sc->mc, sc->n, m1, a2, &e[1]);
+  eval_at(&sc->mc, sc->n, m1, m2, &e[2]);
+  eval_at(&sc->mc, sc->n, m1, b2, &e[3]);
+  eval_at(&sc->mc, sc->n, b1, m2, &e[4]);
   const point *q[4][4] = {{c[0], &e[0], &e[1], &e[2]},
                           {&e[0], c[1], &e[2], &e[3]},
                           {&e[1], &e[2], c[2], &e[4]},
@@ -511,6 +539,7 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
   }
   const ss_params *p = &m->p;
   scan sc = {.m = m,
+             .mc = {.m = m, .ts = {NAN, NAN}, .to = {NAN, NAN}},
              .n = n,
              .dmax = dmax,
              .scale = fmax(p->V, (p->ur - p->us) / p->chi),
