@@ -7,9 +7,9 @@
  * Usage: bench_search [results-dir]
  */
 #include "bench_common.h"
+#include "battery.h"
 
 #include <math.h>
-#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -19,22 +19,14 @@
 #define REPS 5
 #define MAXO 128
 
-static uint64_t rng = 0x2545f4914f6cdd1du;
-static double unif(double a, double b) {
-  rng ^= rng >> 12;
-  rng ^= rng << 25;
-  rng ^= rng >> 27;
-  return a + (b - a) * (double)((rng * 2685821657736338717u) >> 11) * 0x1p-53;
-}
-
 int main(int argc, char **argv) {
   ss_params ps[SETS];
+  battery bt;
+  battery_init(&bt);
   for (int s = 0; s < SETS; s++) {
-    ps[s].chi = unif(0.05, 0.9);
-    ps[s].eta = exp(unif(log(0.2), log(20)));
-    ps[s].us = unif(0.02, 0.3);
-    ps[s].ur = ps[s].us * exp(unif(log(1.5), log(20)));
-    ps[s].V = 1;
+    double q[5];
+    battery_next(&bt, q);
+    ps[s] = (ss_params){q[0], q[1], q[2], q[3], q[4]};
   }
   char path[512];
   snprintf(path, sizeof path, "%s/search.md", argc > 1 ? argv[1] : ".");

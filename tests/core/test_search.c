@@ -17,7 +17,6 @@
  */
 #define _POSIX_C_SOURCE 199309L
 #include <math.h>
-#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -25,20 +24,13 @@
 
 #include <gsl/gsl_errno.h>
 
+#include "battery.h"
 #include "brute.h"
 #include "stickslip.h"
 #include "test.h"
 
 #define MAXO 128
 #define MAXB 64
-
-static uint64_t rng = 0x2545f4914f6cdd1du;
-static double unif(double a, double b) {
-  rng ^= rng >> 12;
-  rng ^= rng << 25;
-  rng ^= rng >> 27;
-  return a + (b - a) * (double)((rng * 2685821657736338717u) >> 11) * 0x1p-53;
-}
 
 static double now(void) {
   struct timespec ts;
@@ -177,16 +169,16 @@ int main(int argc, char **argv) {
   static const ss_params fixed[] = {{0.2759, 0.3357, 0.1833, 1.0572, 1},
                                     {0.2, 4, 0.0724, 0.6178, 1}};
   int n_fixed = first == 0 ? 2 : 0;
+  battery bt;
+  battery_init(&bt);
   for (int s = -n_fixed; s < first + sets; s++) {
     ss_params p;
     if (s < 0) {
       p = fixed[s + n_fixed];
     } else {
-      p.chi = unif(0.05, 0.9);
-      p.eta = exp(unif(log(0.2), log(20)));
-      p.us = unif(0.02, 0.3);
-      p.ur = p.us * exp(unif(log(1.5), log(20)));
-      p.V = 1;
+      double q[5];
+      battery_next(&bt, q);
+      p = (ss_params){q[0], q[1], q[2], q[3], q[4]};
     }
     if (s >= 0 && s < first)
       continue;
