@@ -383,9 +383,9 @@ static int newton(scan *sc, double t1, double t2, double h) {
 }
 
 /* Does each component's corner values reach zero within half their
- * spread?  0: no; 1: both change sign; 2: not both, but the plane through
- * the corners puts the zero within two cells of the centre (Newton's first
- * step, nearly). */
+ * spread?  Where not both change sign, the plane through the corners must
+ * also put the zero within two cells of the centre (Newton's first step,
+ * nearly). */
 static int candidate(const point *c[4]) {
   int strict = 1;
   for (int r = 0; r < 2; r++) {
@@ -412,10 +412,10 @@ static int candidate(const point *c[4]) {
   }
   double det = g1[0] * g2[1] - g2[0] * g1[1];
   if (!(det != 0))
-    return 2;
+    return 1;
   double u = -(f[0] * g2[1] - g2[0] * f[1]) / det;
   double v = -(g1[0] * f[1] - f[0] * g1[1]) / det;
-  return fabs(u) <= 2 && fabs(v) <= 2 ? 2 : 0;
+  return fabs(u) <= 2 && fabs(v) <= 2;
 }
 
 /* A candidate cell [a1, b1] x [a2, b2], corners c as for cell_sos: Newton
@@ -425,8 +425,8 @@ static int candidate(const point *c[4]) {
  * halvings. */
 static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
                      const point *c[4], int refine) {
-  int k = candidate(c);
-  if (!k || newton(sc, 0.5 * (a1 + b1), 0.5 * (a2 + b2), b1 - a1) != -1 ||
+  if (!candidate(c) ||
+      newton(sc, 0.5 * (a1 + b1), 0.5 * (a2 + b2), b1 - a1) != -1 ||
       refine == 0)
     return;
   double m1 = 0.5 * (a1 + b1), m2 = 0.5 * (a2 + b2);

@@ -210,10 +210,6 @@ static int map_newton(collect *c, double s[2], int k, ss_mode *modes,
   return -1;
 }
 
-/* Source 1: iterate P from a seed; if it settles with period k, refine.
- * Every SETTLE_CHECK returns the last ones are compared: repeating to
- * 1e-9 of the scale, it has settled; after SETTLE_TURNS a repetition to
- * 1e-3 (a slowly attracting orbit) is refined all the same. */
 /* Has x (on Sigma0) reached a stable orbit already found?  Brings the list
  * of their returns up to date first. */
 static int reached_known(collect *c, const double x[2]) {
@@ -242,6 +238,10 @@ static int reached_known(collect *c, const double x[2]) {
   return 0;
 }
 
+/* Source 1: iterate P from a seed; if it settles with period k, refine.
+ * Every SETTLE_CHECK returns the last ones are compared: repeating to
+ * 1e-9 of the scale, it has settled; after SETTLE_TURNS a repetition to
+ * 1e-3 (a slowly attracting orbit) is refined all the same. */
 static void from_simulation(collect *c, const double seed[2], int max_k) {
   double pts[SETTLE_TURNS + 1][2];
   int np = 0, k_found = 0;
