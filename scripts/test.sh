@@ -15,8 +15,8 @@ for variant in release sanitize; do
     extra=(-DCMAKE_BUILD_TYPE=Debug "-DSTICKSLIP_SANITIZE=address;undefined")
     # the search battery's brute force and the existence map are slow under
     # the sanitizers: the optimised build runs all 40 sets and 50x50 cells,
-    # this one 2 sets of each half and 12x12 cells
-    sets=(SS_SEARCH_SETS=2 SS_EXISTENCE_N=12)
+    # this one 2 sets of each half, 12x12 cells and an 8x8 map
+    sets=(SS_SEARCH_SETS=2 SS_EXISTENCE_N=12 SS_MAP_N=8)
   else
     extra=(-DCMAKE_BUILD_TYPE=RelWithDebInfo)
   fi

@@ -48,6 +48,10 @@ static const flag FLAGS[] = {
      "requests in one /batch"},
     {"--max-points", F_SIZE, 2, 1e6, CFG(lim.max_points),
      "points of one /continue family"},
+    {"--max-map-cells", F_SIZE, 1, 1e7, CFG(lim.max_map_cells),
+     "cells of one /map"},
+    {"--map-threads", F_UNSIGNED, 1, 1024, CFG(lim.map_threads),
+     "threads of one /map's full searches (default: workers)"},
     {"--batch-parallel", F_UNSIGNED, 1, 1024, CFG(batch_parallel),
      "items of one /batch in flight at once (default: workers)"},
     {"--workers", F_UNSIGNED, 1, 1024, CFG(workers),
@@ -153,6 +157,7 @@ static void defaults(srv_config *cfg) {
   snprintf(cfg->bind, sizeof cfg->bind, "127.0.0.1");
   cfg->port = 8080;
   api_limits_default(&cfg->lim);
+  cfg->lim.map_threads = 0; /* the workers, once their number is known */
   cfg->max_conn = 2048;
   cfg->per_ip = 1024;
   cfg->timeout = 10;
@@ -237,6 +242,8 @@ int main(int argc, char **argv) {
     return rc < 0 ? 0 : rc;
   if (cfg.client_workers == 0) /* another client always finds a worker */
     cfg.client_workers = cfg.workers > 1 ? cfg.workers - 1 : 1;
+  if (cfg.lim.map_threads == 0)
+    cfg.lim.map_threads = cfg.workers;
   if (cfg.batch_parallel == 0)
     cfg.batch_parallel = cfg.workers;
   /* Before any thread exists: GSL must not abort, jansson's hash seed is

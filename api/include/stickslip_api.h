@@ -33,6 +33,8 @@ typedef struct api_limits {
   int max_depth;          /**< JSON nesting depth */
   size_t max_batch_items; /**< requests in one /batch */
   size_t max_points;      /**< points of one /continue family */
+  size_t max_map_cells;   /**< cells of one /map */
+  unsigned map_threads;   /**< threads of one /map's full searches */
 } api_limits;
 
 /** Fill @a l with the defaults documented in the README. */

@@ -58,6 +58,8 @@ void api_limits_default(api_limits *l) {
   l->max_depth = 32;
   l->max_batch_items = 10000;
   l->max_points = 2000;
+  l->max_map_cells = 10000;
+  l->map_threads = 1;
 }
 
 const char *api_version(void) { return SS_VERSION; }

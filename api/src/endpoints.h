@@ -40,6 +40,8 @@
   X(CONTINUE, "POST", "/continue", "continue", API_RUN_COMPUTE,                \
     ep_continue_decode, ep_continue_run, ep_continue_encode,                   \
     ep_continue_release)                                                       \
+  X(MAP, "POST", "/map", "map", API_RUN_COMPUTE, ep_map_decode, ep_map_run,    \
+    ep_map_encode, ep_map_release)                                             \
   X(BATCH, "POST", "/batch", "batch", API_RUN_BATCH, ep_batch_decode,          \
     ep_batch_run, ep_batch_encode, ep_batch_release)                           \
   X(HEALTH, "GET", "/health", "health", API_RUN_INLINE, ep_meta_decode,        \

@@ -1056,6 +1056,118 @@ SS_API int ss_continue_period_doubling(const ss_params *p, const ss_branch *b,
 /** Release what ss_continue_grazing() allocated.  NULL-safe. */
 SS_API void ss_curve_free(ss_curve *c);
 
+/* ------------------------------------------------------------------------ */
+/* Parameter maps                                                            */
+/* ------------------------------------------------------------------------ */
+
+/** One axis of a map: @a n values from @a from to @a to, evenly spaced
+ *  (n = 1: @a from alone). */
+typedef struct ss_map_axis {
+  int param;       /**< an ss_param_id, or with ss_map_opts.physical an
+                        ss_phys_id */
+  double from, to; /**< the first and the last value */
+  int n;           /**< values, >= 1 */
+} ss_map_axis;
+
+/** An orbit of a map cell: what a map tells of it. */
+typedef struct ss_map_orbit {
+  ss_orbit_kind kind;
+  int n_phases;
+  ss_mode modes[SS_MAX_PHASES];
+  double durations[SS_MAX_PHASES];
+  double period;
+  int n_turns;
+  double z0[4];
+  double eig_re[2], eig_im[2]; /**< multipliers, larger modulus first */
+  double spectral_radius;
+  int stable, marginal; /**< as in ss_stab */
+  ss_margin min_margin;
+  /** -1: found by the full search at this cell; else the cell whose orbit,
+   *  as a guess, continued into this one */
+  int from_cell;
+} ss_map_orbit;
+
+/** One cell of a map. */
+typedef struct ss_map_cell {
+  /** 1: the full search (ss_orbit_find() with the map's kinds, max_period
+   *  and effort) ran here and finished: the cell holds every orbit it finds,
+   *  and those continued in from the neighbours; 0: the orbits continued
+   *  in from the neighbours only. */
+  int complete;
+  int n_orbits;
+  ss_map_orbit *orbits; /**< sorted by kind, then period */
+  int truncated;        /**< orbits left out for want of room */
+} ss_map_cell;
+
+/** Options of ss_map_run(); zero-initialise for the defaults. */
+typedef struct ss_map_opts {
+  unsigned kinds; /**< mask of ss_orbit_kind; 0 means all */
+  int max_period; /**< as in ss_orbit_opts (0: 4) */
+  int effort;     /**< of the full searches, as in ss_orbit_opts (0: 2) */
+  /** The full search runs at every search_every-th cell along each axis
+   *  (and the last), at every cell into which a neighbour's orbit does not
+   *  continue and which has no orbit of that sequence, and, when
+   *  search_every is 1, everywhere (see no_edge_search).  0: 8. */
+  int search_every;
+  int max_orbits; /**< per cell (0: 16) */
+  int threads;    /**< the full searches run on this many threads (0: 1) */
+  /** 1: no full search where a family ends (the lattice and the spreading
+   *  only): faster, and blind to a family that begins only there */
+  int no_edge_search;
+  /** Non-NULL: the axes are physical parameters (ss_phys_id) of *physical,
+   *  whose dimensionless parameters each cell takes (times stay
+   *  dimensionless). */
+  const ss_physical *physical;
+  double max_seconds; /**< time budget (0: none) */
+  /** Polled between cells: a non-zero answer stops with SS_ECANCELED. */
+  int (*cancelled)(void *cls);
+  void *cancel_cls;
+} ss_map_opts;
+
+/** A map: cells in row-major order, cell (i, j) at i * axes[1].n + j. */
+typedef struct ss_map {
+  int n_axes;
+  ss_map_axis axes[2];
+  int n_cells;
+  ss_map_cell *cells; /**< malloc'd; ss_map_free() */
+  int searches;       /**< full searches run */
+  int solves;         /**< solves from a neighbour's orbit */
+} ss_map;
+
+/** The value of axis @a a at index @a i. */
+SS_API double ss_map_value(const ss_map_axis *a, int i);
+
+/** The dimensionless parameters of cell @a cell of @a map made from the
+ *  base @a p (or opts->physical; then *omega is its time scale, else 1).
+ *  SS_OK, SS_EDOMAIN (parameters out of range; @a d says which) or
+ *  SS_EINVAL (no such cell). */
+SS_API int ss_map_params(const ss_params *p, const ss_map_opts *opts,
+                         const ss_map *map, int cell, ss_params *out,
+                         double *omega, ss_diag *d);
+
+/**
+ * A map of the periodic orbits over a grid of one or two parameters,
+ * the others those of @a p (or of opts->physical).  Full searches at a
+ * lattice of cells; every orbit found is continued into the neighbouring
+ * cells (8 of them in two dimensions) as a guess, again from every cell
+ * it reaches, so that no cell lacks an orbit of a family that a neighbour
+ * has and that continues into it; where a neighbour's orbit does not
+ * continue and the cell has no orbit of its sequence (a family ends, or
+ * turns), the full search runs there too.  Every orbit is feasible by
+ * ss_orbit_check(), with its stability.
+ * @param n_axes  1 or 2; two axes name different parameters
+ * @param[out] map  release with ss_map_free() whatever happens
+ * @return SS_OK; SS_EINVAL (bad axes or options); SS_EDOMAIN (a cell's
+ *         parameters are out of range: @a d says which); SS_ELIMIT_TIME or
+ *         SS_ECANCELED (the cells done hold what was found); SS_ENOMEM.
+ *         Thread-safe (the cancel hook aside).
+ */
+SS_API int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
+                      const ss_map_opts *opts, ss_map *map, ss_diag *d);
+
+/** Release what ss_map_run() allocated.  NULL-safe; zeroes @a map. */
+SS_API void ss_map_free(ss_map *map);
+
 #ifdef __cplusplus
 }
 #endif

@@ -70,7 +70,7 @@ int ss_phys_by_name(const char *name, ss_phys_id *id) {
   return SS_EINVAL;
 }
 
-static double *phys_ref(ss_physical *ph, ss_phys_id id) {
+double *ss__phys_ref(ss_physical *ph, ss_phys_id id) {
   double *v[] = {&ph->m1, &ph->m2, &ph->k1, &ph->k2, &ph->Fs, &ph->Fr, &ph->v0};
   return (unsigned)id < 7 ? v[id] : NULL;
 }
@@ -89,7 +89,7 @@ void ss_branch_free(ss_branch *b) {
   memset(b, 0, sizeof *b);
 }
 
-static double *param_ref(ss_params *p, ss_param_id id) {
+double *ss__param_ref(ss_params *p, ss_param_id id) {
   switch (id) {
   case SS_PARAM_CHI:
     return &p->chi;
@@ -131,11 +131,11 @@ static int model_at(const cont *c, double v, ss_model *m) {
   ss_params p = c->p;
   if (c->phys) {
     ss_physical ph = c->ph;
-    *phys_ref(&ph, c->pid) = v;
+    *ss__phys_ref(&ph, c->pid) = v;
     if (ss_params_from_physical(&ph, &p, NULL, NULL) != SS_OK)
       return SS_EDOMAIN;
   } else {
-    *param_ref(&p, c->id) = v;
+    *ss__param_ref(&p, c->id) = v;
   }
   return ss_model_init(m, &p, NULL);
 }
@@ -731,11 +731,11 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
     c.phys = 1;
     c.ph = *opts->physical;
     c.pid = opts->phys;
-    v0 = *phys_ref(&c.ph, c.pid);
+    v0 = *ss__phys_ref(&c.ph, c.pid);
     if (ss_params_from_physical(&c.ph, &c.p, NULL, d) != SS_OK)
       return ss__fail(d, SS_EINVAL, "physical", 0, "bad physical parameters");
   } else {
-    v0 = *param_ref(&c.p, c.id);
+    v0 = *ss__param_ref(&c.p, c.id);
   }
   if (!(v0 >= opts->lo && v0 <= opts->hi))
     return ss__fail(d, SS_EINVAL, "range", v0,
@@ -841,8 +841,8 @@ static int gc_q1(const gcont *g) { return g->n + g->interior; }
 
 static void gc_params(const gcont *g, const double *y, ss_params *p) {
   *p = g->p;
-  *param_ref(p, g->id1) = g->lo1 + g->S1 * y[gc_q1(g)];
-  *param_ref(p, g->id2) = g->lo2 + g->S2 * y[gc_q1(g) + 1];
+  *ss__param_ref(p, g->id1) = g->lo1 + g->S1 * y[gc_q1(g)];
+  *ss__param_ref(p, g->id2) = g->lo2 + g->S2 * y[gc_q1(g) + 1];
 }
 
 /* The switching margin at the end of phase k from the start z0, by the
@@ -977,7 +977,7 @@ static int gc_f(const void *ctx, const double *y, double *F, double *J) {
 static int feasible_side(const gcont *g, const double *y) {
   ss_params p;
   gc_params(g, y, &p);
-  double v1 = *param_ref(&p, g->id1), tau[SS_MAX_PHASES];
+  double v1 = *ss__param_ref(&p, g->id1), tau[SS_MAX_PHASES];
   int ok[2];
   for (int k = 0; k < g->n; k++)
     tau[k] = g->T * y[k];
@@ -985,7 +985,7 @@ static int feasible_side(const gcont *g, const double *y) {
     ss_params q = p;
     ss_model m;
     ss_orbit o;
-    *param_ref(&q, g->id1) = v1 * (1 + (s ? 1e-7 : -1e-7));
+    *ss__param_ref(&q, g->id1) = v1 * (1 + (s ? 1e-7 : -1e-7));
     ok[s] = ss_model_init(&m, &q, NULL) == SS_OK &&
             ss_orbit_solve(&m, g->n, g->modes, tau, NULL, &o, NULL) == SS_OK;
   }
@@ -999,8 +999,8 @@ static void gc_point(const gcont *g, const double *y, int side,
   double F[SS_MAX_PHASES];
   memset(pt, 0, sizeof *pt);
   gc_params(g, y, &p);
-  pt->v1 = *param_ref(&p, g->id1);
-  pt->v2 = *param_ref(&p, g->id2);
+  pt->v1 = *ss__param_ref(&p, g->id1);
+  pt->v2 = *ss__param_ref(&p, g->id2);
   for (int k = 0; k < g->n; k++)
     pt->durations[k] = g->T * y[k];
   if (ss_model_init(&m, &p, NULL) == SS_OK)
@@ -1187,7 +1187,7 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   memset(&gc, 0, sizeof gc);
   gc.p = *p;
   gc.kind = kind;
-  *param_ref(&gc.p, p1) = g->value;
+  *ss__param_ref(&gc.p, p1) = g->value;
   gc.id1 = p1;
   gc.id2 = o2->param;
   gc.n = b->n_phases;
@@ -1199,10 +1199,10 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   gc.S1 = scale_of(lo1, hi1, g->value);
   gc.q1max = (hi1 - lo1) / gc.S1;
   gc.lo2 = o2->lo;
-  gc.S2 = scale_of(o2->lo, o2->hi, *param_ref(&gc.p, o2->param));
+  gc.S2 = scale_of(o2->lo, o2->hi, *ss__param_ref(&gc.p, o2->param));
   gc.q2max = (o2->hi - o2->lo) / gc.S2;
   gc.T = g->at.period;
-  double v2 = *param_ref(&gc.p, gc.id2);
+  double v2 = *ss__param_ref(&gc.p, gc.id2);
   if (!(v2 >= o2->lo && v2 <= o2->hi))
     return ss__fail(d, SS_EINVAL, "range", v2,
                     "the range of %s must contain its value %.15g",
@@ -1314,7 +1314,7 @@ int ss_continue_period2(const ss_params *p, const ss_branch *b,
       double v = pd->value + side * STEPS[i] * (o->hi - o->lo);
       if (!(v >= o->lo && v <= o->hi))
         continue;
-      *param_ref(&q, o->param) = v;
+      *ss__param_ref(&q, o->param) = v;
       ss_model m;
       ss_orbit_opts oo;
       ss_orbit found[32];
@@ -1434,7 +1434,7 @@ int ss_beyond_grazing(const ss_params *p, const ss_branch *b,
   double toward = b->points[at == 0 ? 1 : at - 1].value - g->value;
   ss_params q = *p;
   *value = g->value * (1 - (toward > 0 ? 1e-4 : -1e-4));
-  *param_ref(&q, param) = *value;
+  *ss__param_ref(&q, param) = *value;
   ss_model m;
   if (ss_model_init(&m, &q, NULL) != SS_OK)
     return SS_EINVAL;
@@ -1506,7 +1506,8 @@ int ss_continue_adjacent(const ss_params *p, const ss_branch *b,
   out->n_phases = guess.n_phases;
   memcpy(out->modes, guess.modes, sizeof guess.modes);
   ss_params past = *p;
-  *param_ref(&past, o->param) = g->value * (1 - (toward > 0 ? 1e-4 : -1e-4));
+  *ss__param_ref(&past, o->param) =
+      g->value * (1 - (toward > 0 ? 1e-4 : -1e-4));
   ss_model m;
   ss_orbit start;
   int rc = ss_model_init(&m, &past, d);

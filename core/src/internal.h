@@ -62,6 +62,17 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
 int ss__is_repetition(int n, const ss_mode *modes, const double *tau,
                       double tol);
 
+/* Whether orbit b passes through a's start with a's sequence rotated (the
+ * same orbit started at another of its stick -> slip points), states within
+ * @a tol (search.c). */
+int ss__same_orbit(const ss_model *m, const ss_orbit *a, const ss_orbit *b,
+                   double tol);
+
+/* The member of @a p (@a ph) that parameter @a id names; NULL for an id out
+ * of range (continue.c). */
+double *ss__param_ref(ss_params *p, ss_param_id id);
+double *ss__phys_ref(ss_physical *ph, ss_phys_id id);
+
 /* Whether g(t0) is zero within the event finder's tolerance (returns 1) and
  * the direction g leaves t0 in (*dir = -1 down, +1 up); when g(t0) is not
  * zero, returns 0 and *dir is its sign. */

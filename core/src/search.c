@@ -60,8 +60,8 @@ static int scan_stop(void *cls) { return over_budget(cls); }
 
 /* Does orbit b pass through a's start with a's sequence rotated?  Compares
  * a.z0 with b's state at each of its stick -> slip points. */
-static int same_orbit(const ss_model *m, const ss_orbit *a, const ss_orbit *b,
-                      double tol) {
+int ss__same_orbit(const ss_model *m, const ss_orbit *a, const ss_orbit *b,
+                   double tol) {
   if (a->n_phases != b->n_phases ||
       fabs(a->period - b->period) > 1e-6 * (1 + a->period))
     return 0;
@@ -118,7 +118,7 @@ static void add_orbit(collect *c, const ss_orbit *found) {
     return;
   }
   for (int i = 0; i < c->n; i++)
-    if (same_orbit(c->m, o, &c->out[i], 1e-6 * c->scale)) {
+    if (ss__same_orbit(c->m, o, &c->out[i], 1e-6 * c->scale)) {
       c->rep->duplicates++;
       return;
     }

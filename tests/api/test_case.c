@@ -99,6 +99,8 @@ static int set_limits(const char *path, api_limits *lim) {
       lim->max_orbits = (int)x;
     else if (!strcmp(k, "max_points"))
       lim->max_points = (size_t)x;
+    else if (!strcmp(k, "max_map_cells"))
+      lim->max_map_cells = (size_t)x;
     else {
       json_decref(j);
       return -1;

@@ -909,7 +909,8 @@ static int same_json(json_t *a, json_t *b, double rtol, char *where, size_t n) {
   return 0;
 }
 
-/* The lines of NDJSON text @a t as an array ordered by "index", the line
+/* The lines of NDJSON text @a t as an array ordered by "index" (a batch's
+ * items; a map's cells, whose index is an array, in their order), the line
  * without one last, "seconds" dropped; NULL when a line is not JSON. */
 static json_t *ndjson_sorted(const char *t) {
   json_t *a = json_array(), *last = NULL;
@@ -924,7 +925,9 @@ static json_t *ndjson_sorted(const char *t) {
     }
     json_object_del(l, "seconds");
     json_t *ix = json_object_get(l, "index");
-    if (!json_is_integer(ix)) {
+    if (json_is_array(ix)) { /* a map's cells, in the order written */
+      json_array_append_new(a, l);
+    } else if (!json_is_integer(ix)) {
       json_decref(last);
       last = l;
     } else {

@@ -1,0 +1,498 @@
+/*
+ * map.c: the periodic orbits over a grid of one or two parameters.
+ *
+ * A full search (ss_orbit_find) costs milliseconds; a solve from a guess
+ * tens of microseconds.  So the full search runs on a lattice of cells
+ * (every search_every-th along each axis, and the last), and every orbit
+ * found anywhere is then continued into each neighbouring cell as a guess
+ * (ss_orbit_find from a guess: solved, checked feasible, a repetition of a
+ * shorter orbit reduced to it).  A cell that gains an orbit puts its
+ * neighbours back on the work list, so a family spreads over every cell of
+ * its region that it reaches from a cell where it was found, around corners
+ * and across the whole grid.  A neighbour's orbit that does not continue
+ * into a cell that has no orbit of its sequence marks the edge of a family
+ * (a grazing, a fold): the full search runs there too, for what begins where
+ * another family ends, and the spreading goes on from what it finds.
+ *
+ * Each neighbour's orbits are tried once per cell (a cell remembers how
+ * many of each neighbour's orbits it has tried; orbits are only ever
+ * appended), and never the one that was itself continued from the cell:
+ * solved back, it gives the orbit the cell has.
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal.h"
+
+#define MAP_SEARCH_EVERY 8
+#define MAP_MAX_ORBITS 16
+#define MAP_MAX_CELLS (1 << 24)
+#define MAP_MAX_THREADS 64
+
+/* A cell while the map is made. */
+typedef struct work {
+  int tried[8]; /* of each neighbour's orbits, how many were tried */
+  unsigned char queued, searched, ended;
+} work;
+
+typedef struct mapper {
+  const ss_params *p;
+  const ss_map_opts *o;
+  ss_map *map;
+  work *w;
+  int *queue; /* a ring of the cells to visit */
+  int head, count;
+  unsigned kinds;
+  int max_period, effort, max_orbits, threads;
+  double t_start;
+  int stopped;
+} mapper;
+
+double ss_map_value(const ss_map_axis *a, int i) {
+  if (a->n <= 1)
+    return a->from;
+  /* exact at both ends, and at the middle of an odd count */
+  double k = (double)(a->n - 1);
+  return (a->from * (k - (double)i) + a->to * (double)i) / k;
+}
+
+static int axis_name_ok(const ss_map_opts *o, int param) {
+  return o && o->physical ? ss_phys_name((ss_phys_id)param) != NULL
+                          : ss_param_name((ss_param_id)param) != NULL;
+}
+
+static const char *axis_name(const ss_map_opts *o, int param) {
+  return o && o->physical ? ss_phys_name((ss_phys_id)param)
+                          : ss_param_name((ss_param_id)param);
+}
+
+int ss_map_params(const ss_params *p, const ss_map_opts *opts,
+                  const ss_map *map, int cell, ss_params *out, double *omega,
+                  ss_diag *d) {
+  if (!map || !out || cell < 0 || cell >= map->n_cells ||
+      (!p && !(opts && opts->physical)))
+    return ss__fail(d, SS_EINVAL, "cell", cell, "no such cell");
+  int idx[2] = {cell, 0};
+  if (map->n_axes == 2) {
+    idx[0] = cell / map->axes[1].n;
+    idx[1] = cell % map->axes[1].n;
+  }
+  if (omega)
+    *omega = 1;
+  if (opts && opts->physical) {
+    ss_physical ph = *opts->physical;
+    for (int a = 0; a < map->n_axes; a++)
+      *ss__phys_ref(&ph, (ss_phys_id)map->axes[a].param) =
+          ss_map_value(&map->axes[a], idx[a]);
+    return ss_params_from_physical(&ph, out, omega, d);
+  }
+  *out = *p;
+  for (int a = 0; a < map->n_axes; a++)
+    *ss__param_ref(out, (ss_param_id)map->axes[a].param) =
+        ss_map_value(&map->axes[a], idx[a]);
+  return ss_params_check(out, d);
+}
+
+void ss_map_free(ss_map *map) {
+  if (!map)
+    return;
+  for (int i = 0; map->cells && i < map->n_cells; i++)
+    free(map->cells[i].orbits);
+  free(map->cells);
+  memset(map, 0, sizeof *map);
+}
+
+static int over_budget(mapper *mp) {
+  const ss_map_opts *o = mp->o;
+  if (!mp->stopped && o->max_seconds > 0 &&
+      ss__now() - mp->t_start > o->max_seconds)
+    mp->stopped = SS_ELIMIT_TIME;
+  if (!mp->stopped && o->cancelled && o->cancelled(o->cancel_cls))
+    mp->stopped = SS_ECANCELED;
+  return mp->stopped != 0;
+}
+
+/* The neighbour of @a cell in direction @a k (0..7), or -1. */
+static int neighbour(const ss_map *map, int cell, int k) {
+  static const int DI[8] = {-1, -1, -1, 0, 0, 1, 1, 1};
+  static const int DJ[8] = {-1, 0, 1, -1, 1, -1, 0, 1};
+  if (map->n_axes == 1) {
+    if (k != 3 && k != 4)
+      return -1;
+    int j = cell + DJ[k];
+    return j >= 0 && j < map->n_cells ? j : -1;
+  }
+  int n1 = map->axes[1].n, i = cell / n1 + DI[k], j = cell % n1 + DJ[k];
+  if (i < 0 || i >= map->axes[0].n || j < 0 || j >= n1)
+    return -1;
+  return i * n1 + j;
+}
+
+static void enqueue(mapper *mp, int cell) {
+  if (cell < 0 || mp->w[cell].queued)
+    return;
+  mp->w[cell].queued = 1;
+  mp->queue[(mp->head + mp->count) % mp->map->n_cells] = cell;
+  mp->count++;
+}
+
+static void enqueue_neighbours(mapper *mp, int cell) {
+  for (int k = 0; k < 8; k++)
+    enqueue(mp, neighbour(mp->map, cell, k));
+}
+
+/* The parts of a map orbit ss__same_orbit reads. */
+static void as_orbit(const ss_model *m, const ss_map_orbit *a, ss_orbit *o) {
+  o->n_phases = a->n_phases;
+  memcpy(o->modes, a->modes, sizeof o->modes);
+  memcpy(o->durations, a->durations, sizeof o->durations);
+  o->period = a->period;
+  memcpy(o->z0, a->z0, sizeof o->z0);
+  memcpy(o->x0, a->z0, sizeof o->x0);
+  o->x0[0] += m->d0[0];
+  o->x0[1] += m->d0[1];
+}
+
+/* Add @a o to @a cell unless it holds it already; 1 if added. */
+static int add(mapper *mp, const ss_model *m, int cell, const ss_orbit *o,
+               int from_cell) {
+  ss_map_cell *c = &mp->map->cells[cell];
+  if (!(mp->kinds & o->kind) || o->n_turns > mp->max_period)
+    return 0;
+  double tol = 1e-6 * fmax(m->p.V, (m->p.ur - m->p.us) / m->p.chi);
+  for (int i = 0; i < c->n_orbits; i++) {
+    ss_orbit q;
+    as_orbit(m, &c->orbits[i], &q);
+    if (ss__same_orbit(m, o, &q, tol))
+      return 0;
+  }
+  if (c->n_orbits == mp->max_orbits) {
+    c->truncated++;
+    return 0;
+  }
+  if (c->n_orbits % 4 == 0) {
+    ss_map_orbit *g =
+        realloc(c->orbits, (size_t)(c->n_orbits + 4) * sizeof *c->orbits);
+    if (!g) {
+      mp->stopped = SS_ENOMEM;
+      return 0;
+    }
+    c->orbits = g;
+  }
+  /* appended: the neighbours count what they tried in this order; sorted
+   * when the map is done */
+  ss_map_orbit *a = &c->orbits[c->n_orbits];
+  memset(a, 0, sizeof *a);
+  a->kind = o->kind;
+  a->n_phases = o->n_phases;
+  memcpy(a->modes, o->modes, sizeof a->modes);
+  memcpy(a->durations, o->durations, sizeof a->durations);
+  a->period = o->period;
+  a->n_turns = o->n_turns;
+  memcpy(a->z0, o->z0, sizeof a->z0);
+  for (int k = 0; k < 2; k++) {
+    a->eig_re[k] = o->stab.eig_re[k];
+    a->eig_im[k] = o->stab.eig_im[k];
+  }
+  a->spectral_radius = o->stab.spectral_radius;
+  a->stable = o->stab.stable;
+  a->marginal = o->stab.marginal;
+  a->min_margin = o->min_margin;
+  a->from_cell = from_cell;
+  c->n_orbits++;
+  return 1;
+}
+
+static int by_kind_period(const void *a, const void *b) {
+  const ss_map_orbit *x = a, *y = b;
+  if (x->kind != y->kind)
+    return x->kind < y->kind ? -1 : 1;
+  return x->period < y->period ? -1 : x->period > y->period ? 1 : 0;
+}
+
+static int model_of(mapper *mp, int cell, ss_model *m, ss_diag *d) {
+  ss_params q;
+  int rc = ss_map_params(mp->p, mp->o, mp->map, cell, &q, NULL, d);
+  return rc ? rc : ss_model_init(m, &q, d);
+}
+
+/* A full search, made on any thread, its orbits added on the map's. */
+typedef struct job {
+  int cell;
+  int rc, n;
+  ss_model m;
+  ss_orbit out[32];
+  ss_diag d;
+} job;
+
+typedef struct pool {
+  mapper *mp;
+  job *jobs;
+  int n, next;
+  pthread_mutex_t lock;
+} pool;
+
+static void run_job(mapper *mp, job *jb) {
+  ss_diag_clear(&jb->d);
+  jb->n = 0;
+  if ((jb->rc = model_of(mp, jb->cell, &jb->m, &jb->d)) != SS_OK)
+    return;
+  ss_orbit_opts oo;
+  memset(&oo, 0, sizeof oo);
+  oo.kinds = mp->kinds;
+  oo.max_period = mp->max_period;
+  oo.effort = mp->effort;
+  oo.cancelled = mp->o->cancelled;
+  oo.cancel_cls = mp->o->cancel_cls;
+  if (mp->o->max_seconds > 0) {
+    oo.max_seconds = mp->o->max_seconds - (ss__now() - mp->t_start);
+    if (!(oo.max_seconds > 0)) {
+      jb->rc = SS_ELIMIT_TIME;
+      return;
+    }
+  }
+  jb->rc = ss_orbit_find(&jb->m, &oo, jb->out, 32, &jb->n, NULL, &jb->d);
+}
+
+static void *worker(void *arg) {
+  pool *pl = arg;
+  for (;;) {
+    pthread_mutex_lock(&pl->lock);
+    int i = pl->next < pl->n ? pl->next++ : -1;
+    pthread_mutex_unlock(&pl->lock);
+    if (i < 0)
+      return NULL;
+    run_job(pl->mp, &pl->jobs[i]);
+  }
+}
+
+/* The full search at each of the @a n cells, on up to opts->threads
+ * threads; their orbits are added in the order of the cells. */
+static int search_cells(mapper *mp, const int *cells, int n, ss_diag *d) {
+  enum { CHUNK = 64 };
+  job *jobs = malloc(CHUNK * sizeof *jobs);
+  if (!jobs)
+    return mp->stopped = SS_ENOMEM;
+  int rc = SS_OK;
+  for (int at = 0; at < n && rc == SS_OK && !over_budget(mp); at += CHUNK) {
+    int k = n - at < CHUNK ? n - at : CHUNK;
+    for (int i = 0; i < k; i++)
+      jobs[i].cell = cells[at + i];
+    pool pl = {mp, jobs, k, 0, PTHREAD_MUTEX_INITIALIZER};
+    int nt = mp->threads < k ? mp->threads : k, started = 0;
+    pthread_t th[MAP_MAX_THREADS];
+    for (int t = 1; t < nt; t++)
+      if (pthread_create(&th[started], NULL, worker, &pl) == 0)
+        started++;
+    worker(&pl);
+    for (int t = 0; t < started; t++)
+      pthread_join(th[t], NULL);
+    for (int i = 0; i < k; i++) {
+      job *jb = &jobs[i];
+      mp->w[jb->cell].searched = 1;
+      mp->map->searches++;
+      int gained = 0;
+      for (int o = 0; o < jb->n; o++)
+        gained += add(mp, &jb->m, jb->cell, &jb->out[o], -1);
+      if (gained)
+        enqueue_neighbours(mp, jb->cell);
+      if (jb->rc == SS_OK)
+        mp->map->cells[jb->cell].complete = 1;
+      else if (jb->rc == SS_ELIMIT_TIME || jb->rc == SS_ECANCELED)
+        mp->stopped = jb->rc;
+      else if (rc == SS_OK) {
+        rc = jb->rc;
+        if (d)
+          *d = jb->d;
+      }
+    }
+  }
+  free(jobs);
+  return rc ? rc : mp->stopped;
+}
+
+/* Continue the neighbours' orbits into @a cell. */
+static int visit(mapper *mp, int cell, ss_diag *d) {
+  ss_model m;
+  int rc = model_of(mp, cell, &m, d);
+  if (rc)
+    return rc;
+  work *w = &mp->w[cell];
+  ss_map_cell *c = &mp->map->cells[cell];
+  const ss_map_orbit *failed[8 * MAP_MAX_ORBITS];
+  int gained = 0, n_failed = 0;
+  for (int k = 0; k < 8 && !mp->stopped; k++) {
+    int nb = neighbour(mp->map, cell, k);
+    if (nb < 0)
+      continue;
+    const ss_map_cell *b = &mp->map->cells[nb];
+    for (int t = w->tried[k]; t < b->n_orbits; t++) {
+      const ss_map_orbit *q = &b->orbits[t];
+      if (q->from_cell == cell)
+        continue;
+      ss_orbit_opts oo;
+      ss_orbit o;
+      int n = 0;
+      memset(&oo, 0, sizeof oo);
+      oo.n_guess = q->n_phases;
+      memcpy(oo.guess_modes, q->modes, sizeof oo.guess_modes);
+      memcpy(oo.guess, q->durations, sizeof oo.guess);
+      mp->map->solves++;
+      rc = ss_orbit_find(&m, &oo, &o, 1, &n, NULL, NULL);
+      if (rc == SS_ENOMEM)
+        return mp->stopped = rc;
+      if (n == 1)
+        gained += add(mp, &m, cell, &o, nb);
+      else if (n_failed < 8 * MAP_MAX_ORBITS)
+        failed[n_failed++] = q;
+    }
+    w->tried[k] = b->n_orbits;
+  }
+  /* a family ends here where its orbit did not continue from a neighbour
+   * and the cell has no orbit of its sequence from another */
+  for (int f = 0; f < n_failed && !w->ended; f++) {
+    int has = 0;
+    for (int i = 0; i < c->n_orbits && !has; i++)
+      has = c->orbits[i].n_phases == failed[f]->n_phases &&
+            !memcmp(c->orbits[i].modes, failed[f]->modes,
+                    (size_t)failed[f]->n_phases * sizeof failed[f]->modes[0]);
+    w->ended = !has;
+  }
+  if (gained)
+    enqueue_neighbours(mp, cell);
+  return SS_OK;
+}
+
+/* Visit the cells on the work list until it is empty. */
+static int spread(mapper *mp, ss_diag *d) {
+  while (mp->count > 0 && !over_budget(mp)) {
+    int cell = mp->queue[mp->head];
+    mp->head = (mp->head + 1) % mp->map->n_cells;
+    mp->count--;
+    mp->w[cell].queued = 0;
+    int rc = visit(mp, cell, d);
+    if (rc)
+      return rc;
+  }
+  return mp->stopped;
+}
+
+int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
+               const ss_map_opts *opts, ss_map *map, ss_diag *d) {
+  ss_map_opts def;
+  memset(&def, 0, sizeof def);
+  if (!map)
+    return ss__fail(d, SS_EINVAL, "map", 0, "missing output");
+  memset(map, 0, sizeof *map);
+  if (!opts)
+    opts = &def;
+  if ((!p && !opts->physical) || !axes)
+    return ss__fail(d, SS_EINVAL, "params", 0, "missing parameters or axes");
+  if (n_axes < 1 || n_axes > 2)
+    return ss__fail(d, SS_EINVAL, "axes", n_axes, "a map has 1 or 2 axes");
+  long cells = 1;
+  for (int a = 0; a < n_axes; a++) {
+    const ss_map_axis *x = &axes[a];
+    if (!axis_name_ok(opts, x->param))
+      return ss__fail(d, SS_EINVAL, "axes", a, "axis %d: no such parameter", a);
+    if (!isfinite(x->from) || !isfinite(x->to) || x->n < 1 ||
+        (x->n > 1 && !(x->from != x->to)))
+      return ss__fail(d, SS_EINVAL, "axes", a,
+                      "axis %d: finite from and to, different when n > 1, "
+                      "and n >= 1",
+                      a);
+    cells *= x->n;
+    if (cells > MAP_MAX_CELLS)
+      return ss__fail(d, SS_EINVAL, "axes", (double)cells, "more than %d cells",
+                      MAP_MAX_CELLS);
+  }
+  if (n_axes == 2 && axes[0].param == axes[1].param)
+    return ss__fail(d, SS_EINVAL, "axes", 1,
+                    "the two axes name the same parameter, %s",
+                    axis_name(opts, axes[0].param));
+  if (opts->search_every < 0 || opts->max_orbits < 0)
+    return ss__fail(d, SS_EINVAL, "search_every", opts->search_every,
+                    "search_every and max_orbits are >= 0");
+  mapper mp;
+  memset(&mp, 0, sizeof mp);
+  mp.p = p;
+  mp.o = opts;
+  mp.map = map;
+  mp.kinds = opts->kinds ? opts->kinds : SS_ORBIT_ALL;
+  mp.max_period = opts->max_period ? opts->max_period : 4;
+  mp.effort = opts->effort ? opts->effort : 2;
+  mp.max_orbits = opts->max_orbits ? opts->max_orbits : MAP_MAX_ORBITS;
+  mp.threads = opts->threads < 1                 ? 1
+               : opts->threads > MAP_MAX_THREADS ? MAP_MAX_THREADS
+                                                 : opts->threads;
+  if (mp.max_period < 1 || mp.max_period > 8 || mp.effort < 1 || mp.effort > 3)
+    return ss__fail(d, SS_EINVAL, "max_period", mp.max_period,
+                    "max_period is 1..8 and effort 1..3");
+  mp.t_start = ss__now();
+  map->n_axes = n_axes;
+  memcpy(map->axes, axes, (size_t)n_axes * sizeof *axes);
+  if (n_axes == 1) /* one column: cell j is (0, j) */
+    map->axes[1] =
+        (ss_map_axis){axes[0].param, axes[0].from, axes[0].to, axes[0].n};
+  map->n_cells = (int)cells;
+  /* every cell's parameters in range, before any work */
+  for (int i = 0; i < map->n_cells; i++) {
+    ss_params q;
+    int rc = ss_map_params(p, opts, map, i, &q, NULL, d);
+    if (rc != SS_OK) {
+      map->n_cells = 0;
+      return rc;
+    }
+  }
+  map->cells = calloc((size_t)cells, sizeof *map->cells);
+  mp.w = calloc((size_t)cells, sizeof *mp.w);
+  mp.queue = malloc((size_t)cells * sizeof *mp.queue);
+  if (!map->cells || !mp.w || !mp.queue) {
+    free(mp.w);
+    free(mp.queue);
+    ss_map_free(map);
+    return ss__fail(d, SS_ENOMEM, "", 0, "out of memory for the map");
+  }
+  int every = opts->search_every ? opts->search_every : MAP_SEARCH_EVERY;
+  int *todo = malloc((size_t)cells * sizeof *todo), n_todo = 0, rc = SS_OK;
+  if (!todo)
+    rc = SS_ENOMEM;
+  /* the lattice */
+  int n0 = n_axes == 2 ? axes[0].n : 1, n1 = map->axes[1].n;
+  for (int i = 0; i < n0 && todo; i++)
+    for (int j = 0; j < n1; j++)
+      if ((n_axes == 1 || i % every == 0 || i == n0 - 1) &&
+          (j % every == 0 || j == n1 - 1))
+        todo[n_todo++] = i * n1 + j;
+  if (rc == SS_OK)
+    rc = search_cells(&mp, todo, n_todo, d);
+  /* spread; search where families end; spread what that finds */
+  while (rc == SS_OK && (rc = spread(&mp, d)) == SS_OK &&
+         !opts->no_edge_search) {
+    n_todo = 0;
+    for (int c = 0; c < map->n_cells; c++)
+      if (mp.w[c].ended && !mp.w[c].searched)
+        todo[n_todo++] = c;
+    if (n_todo == 0)
+      break;
+    rc = search_cells(&mp, todo, n_todo, d);
+  }
+  free(todo);
+  if (rc == SS_OK)
+    rc = mp.stopped;
+  for (int c = 0; c < map->n_cells; c++)
+    qsort(map->cells[c].orbits, (size_t)map->cells[c].n_orbits,
+          sizeof(ss_map_orbit), by_kind_period);
+  free(mp.w);
+  free(mp.queue);
+  if (rc == SS_ELIMIT_TIME)
+    return ss__fail(d, rc, "max_seconds", opts->max_seconds,
+                    "the map ran out of its %g s budget", opts->max_seconds);
+  if (rc == SS_ECANCELED)
+    return ss__fail(d, rc, "", 0, "the map was cancelled");
+  if (rc == SS_ENOMEM)
+    return ss__fail(d, rc, "", 0, "out of memory for the map");
+  return rc;
+}

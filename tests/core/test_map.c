@@ -1,0 +1,257 @@
+/*
+ * test_map.c: ss_map_run against the full search at every cell.
+ *
+ * The n x n existence map of the overshoot orbits of test_existence (ur/us
+ * 1.5-15 and chi 0.04-0.96, eta = 4, us = 0.0724, V = 1) is made by
+ * ss_map_run with its defaults, and every cell is searched on its own by
+ * ss_orbit_find (what n^2 separate /orbit requests do):
+ *  - every orbit the separate searches find is in the map's cell;
+ *  - no hole: every orbit of a cell's neighbour, given as a guess at the
+ *    cell, either solves to no feasible orbit or to one the cell has;
+ *  - every orbit of the map closes: the Poincare map by simulation from its
+ *    start returns to it within 1e-8 after its turns;
+ *  - a complete cell holds what the search alone finds there, no fewer;
+ * and on a 1-D sweep: search_every = 1 makes every cell complete; the time
+ * budget and the cancel hook stop a map; axes and parameters out of range
+ * are refused; a physical map equals the dimensionless one.
+ * Usage: test_map [n]   (default 12; SS_MAP_N overrides)
+ */
+#define _POSIX_C_SOURCE 199309L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "stickslip.h"
+#include "test.h"
+
+#define MAXO 32
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* Does the cell hold an orbit of the sequence and durations of @a o? */
+static int holds(const ss_map_cell *c, int n, const ss_mode *modes,
+                 const double *dur, double period) {
+  for (int i = 0; i < c->n_orbits; i++) {
+    const ss_map_orbit *q = &c->orbits[i];
+    if (q->n_phases != n || fabs(q->period - period) > 1e-6 * (1 + period))
+      continue;
+    /* the same orbit may start at another of its stick -> slip points */
+    for (int r = 0; r < n; r++) {
+      int same = 1;
+      for (int k = 0; k < n && same; k++)
+        same = q->modes[k] == modes[(k + r) % n] &&
+               fabs(q->durations[k] - dur[(k + r) % n]) < 1e-6 * (1 + period);
+      if (same)
+        return 1;
+    }
+  }
+  return 0;
+}
+
+static void test_grid(int N) {
+  ss_params base = {0.2, 4, 0.0724, 0.6178, 1};
+  ss_map_axis ax[2] = {{SS_PARAM_CHI, 0.04, 0.96, N},
+                       {SS_PARAM_UR, 0.0724 * 1.5, 0.0724 * 15, N}};
+  ss_map_opts mo;
+  memset(&mo, 0, sizeof mo);
+  mo.kinds = SS_ORBIT_OVERSHOOT;
+  mo.search_every = N > 8 ? 4 : 3; /* a lattice sparse for the grid */
+  ss_map map;
+  ss_diag d;
+  double t0 = now();
+  ASSERT_EQ_INT(ss_map_run(&base, 2, ax, &mo, &map, &d), SS_OK);
+  double t_map = now() - t0;
+  ASSERT_EQ_INT(map.n_cells, N * N);
+  int with = 0, complete = 0, missing = 0, holes = 0, unclosed = 0, lesser = 0;
+  double t_sep = 0;
+  ss_orbit out[MAXO];
+  for (int c = 0; c < map.n_cells; c++) {
+    ss_params p;
+    ss_model m;
+    ASSERT_EQ_INT(ss_map_params(&base, &mo, &map, c, &p, NULL, NULL), SS_OK);
+    ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+    const ss_map_cell *ce = &map.cells[c];
+    with += ce->n_orbits > 0;
+    complete += ce->complete;
+    /* the separate search */
+    ss_orbit_opts oo;
+    memset(&oo, 0, sizeof oo);
+    oo.kinds = SS_ORBIT_OVERSHOOT;
+    int n = 0;
+    double t1 = now();
+    ASSERT_EQ_INT(ss_orbit_find(&m, &oo, out, MAXO, &n, NULL, NULL), SS_OK);
+    t_sep += now() - t1;
+    for (int k = 0; k < n; k++)
+      if (!holds(ce, out[k].n_phases, out[k].modes, out[k].durations,
+                 out[k].period)) {
+        missing++;
+        printf("missing: cell %d (chi %.4f ur %.4f) durations [%.6g %.6g "
+               "%.6g]\n",
+               c, p.chi, p.ur, out[k].durations[0], out[k].durations[1],
+               out[k].durations[2]);
+      }
+    if (ce->complete && ce->n_orbits < n)
+      lesser++;
+    /* closure by simulation */
+    for (int k = 0; k < ce->n_orbits; k++) {
+      const ss_map_orbit *q = &ce->orbits[k];
+      double s[2] = {q->z0[0], q->z0[2]}, e[2];
+      if (ss_poincare(&m, s, q->n_turns, 64 * (size_t)q->n_phases, e, NULL,
+                      NULL, NULL) != SS_OK ||
+          !(fabs(e[0] - s[0]) + fabs(e[1] - s[1]) < 1e-8 * (1 + fabs(s[0]))))
+        unclosed++;
+    }
+    /* no hole: the neighbours' orbits as guesses here */
+    int i = c / N, j = c % N;
+    for (int di = -1; di <= 1; di++)
+      for (int dj = -1; dj <= 1; dj++) {
+        int a = i + di, b = j + dj;
+        if ((!di && !dj) || a < 0 || b < 0 || a >= N || b >= N)
+          continue;
+        const ss_map_cell *nb = &map.cells[a * N + b];
+        for (int k = 0; k < nb->n_orbits; k++) {
+          const ss_map_orbit *q = &nb->orbits[k];
+          ss_orbit o;
+          if (ss_orbit_solve(&m, q->n_phases, q->modes, q->durations, NULL, &o,
+                             NULL) == SS_OK &&
+              !holds(ce, o.n_phases, o.modes, o.durations, o.period)) {
+            holes++;
+            printf("hole: cell %d (chi %.4f ur %.4f): the orbit of its "
+                   "neighbour (%+d, %+d) continues into it\n",
+                   c, p.chi, p.ur, di, dj);
+          }
+        }
+      }
+  }
+  printf("map %dx%d: %d cells with an overshoot orbit, %d complete, %d full "
+         "searches, %d solves, %.3f s; separate searches %.3f s (%.1fx); "
+         "%d missing, %d holes, %d not closing, %d complete cells short\n",
+         N, N, with, complete, map.searches, map.solves, t_map, t_sep,
+         t_sep / t_map, missing, holes, unclosed, lesser);
+  ASSERT_TRUE(with > 0);
+  ASSERT_EQ_INT(missing, 0);
+  ASSERT_EQ_INT(holes, 0);
+  ASSERT_EQ_INT(unclosed, 0);
+  ASSERT_EQ_INT(lesser, 0);
+  /* the lattice: cells (0, 0) and (N-1, N-1) were searched */
+  ASSERT_TRUE(map.cells[0].complete && map.cells[N * N - 1].complete);
+  ss_map_free(&map);
+}
+
+static int cancel_now(void *cls) {
+  (void)cls;
+  return 1;
+}
+
+static void test_sweep(void) {
+  ss_params base = {0.2, 4, 0.0724, 0.6178, 1};
+  ss_map_axis ax = {SS_PARAM_UR, 0.55, 0.75, 9};
+  ss_map_opts mo;
+  memset(&mo, 0, sizeof mo);
+  mo.kinds = SS_ORBIT_OVERSHOOT;
+  mo.search_every = 1;
+  ss_map map;
+  ss_diag d;
+  ASSERT_EQ_INT(ss_map_run(&base, 1, &ax, &mo, &map, &d), SS_OK);
+  ASSERT_EQ_INT(map.n_cells, 9);
+  ASSERT_EQ_INT(map.searches, 9);
+  int with = 0;
+  for (int c = 0; c < 9; c++) {
+    ASSERT_TRUE(map.cells[c].complete);
+    with += map.cells[c].n_orbits > 0;
+  }
+  /* the paper's overshoot orbit exists above its grazing (ur ~ 0.62) */
+  ASSERT_TRUE(map.cells[0].n_orbits == 0 && map.cells[8].n_orbits == 1);
+  ASSERT_TRUE(with >= 4 && with <= 7);
+  /* the axis's values are exact at both ends and the middle */
+  ASSERT_TRUE(ss_map_value(&map.axes[0], 0) == 0.55 &&
+              ss_map_value(&map.axes[0], 8) == 0.75 &&
+              ss_map_value(&map.axes[0], 4) == 0.65);
+
+  /* the same sweep in physical units: m1 = 1, k1 + k2 = 1, so omega = 1
+   * and the dimensionless parameters are the physical ones (Fr = ur) */
+  ss_physical ph = {1, 0.25, 0.8, 0.2, 0.0724, 0.6178, 1};
+  ss_map_axis pax = {SS_PHYS_FR, 0.55, 0.75, 9};
+  ss_map pm;
+  mo.physical = &ph;
+  ASSERT_EQ_INT(ss_map_run(NULL, 1, &pax, &mo, &pm, &d), SS_OK);
+  for (int c = 0; c < 9; c++) {
+    ASSERT_EQ_INT(pm.cells[c].n_orbits, map.cells[c].n_orbits);
+    for (int k = 0; k < pm.cells[c].n_orbits; k++)
+      ASSERT_NEAR(pm.cells[c].orbits[k].period, map.cells[c].orbits[k].period,
+                  1e-9);
+  }
+  ss_map_free(&pm);
+  mo.physical = NULL;
+  ss_map_free(&map);
+
+  /* stops: the budget, the cancel hook */
+  ss_map_axis big[2] = {{SS_PARAM_CHI, 0.1, 0.9, 40},
+                        {SS_PARAM_UR, 0.2, 1.0, 40}};
+  mo.search_every = 1;
+  mo.max_seconds = 0.05;
+  double t0 = now();
+  ASSERT_EQ_INT(ss_map_run(&base, 2, big, &mo, &map, &d), SS_ELIMIT_TIME);
+  ASSERT_TRUE(now() - t0 < 2);
+  ASSERT_TRUE(map.searches < 1600);
+  ss_map_free(&map);
+  mo.max_seconds = 0;
+  mo.cancelled = cancel_now;
+  ASSERT_EQ_INT(ss_map_run(&base, 2, big, &mo, &map, &d), SS_ECANCELED);
+  ss_map_free(&map);
+  mo.cancelled = NULL;
+
+  /* refused: a cell with ur <= us, one parameter twice, no cells */
+  ss_map_axis low = {SS_PARAM_UR, 0.05, 0.5, 10};
+  ss_diag_clear(&d);
+  ASSERT_EQ_INT(ss_map_run(&base, 1, &low, &mo, &map, &d), SS_EDOMAIN);
+  ASSERT_TRUE(strstr(d.text, "ur") != NULL);
+  ss_map_free(&map);
+  ss_map_axis twice[2] = {{SS_PARAM_UR, 0.5, 0.7, 3},
+                          {SS_PARAM_UR, 0.5, 0.7, 3}};
+  ASSERT_EQ_INT(ss_map_run(&base, 2, twice, &mo, &map, &d), SS_EINVAL);
+  ss_map_axis none = {SS_PARAM_UR, 0.5, 0.7, 0};
+  ASSERT_EQ_INT(ss_map_run(&base, 1, &none, &mo, &map, &d), SS_EINVAL);
+  ss_map_axis flat = {SS_PARAM_UR, 0.5, 0.5, 3};
+  ASSERT_EQ_INT(ss_map_run(&base, 1, &flat, &mo, &map, &d), SS_EINVAL);
+  ss_map_free(&map);
+}
+
+/* Two threads give the map one thread gives. */
+static void test_threads(void) {
+  ss_params base = {0.2, 4, 0.0724, 0.6178, 1};
+  ss_map_axis ax[2] = {{SS_PARAM_CHI, 0.15, 0.35, 6},
+                       {SS_PARAM_UR, 0.5, 0.9, 6}};
+  ss_map_opts mo;
+  memset(&mo, 0, sizeof mo);
+  mo.kinds = SS_ORBIT_OVERSHOOT;
+  mo.search_every = 2;
+  ss_map a, b;
+  ASSERT_EQ_INT(ss_map_run(&base, 2, ax, &mo, &a, NULL), SS_OK);
+  mo.threads = 2;
+  ASSERT_EQ_INT(ss_map_run(&base, 2, ax, &mo, &b, NULL), SS_OK);
+  ASSERT_EQ_INT(a.searches, b.searches);
+  for (int c = 0; c < a.n_cells; c++) {
+    ASSERT_EQ_INT(a.cells[c].n_orbits, b.cells[c].n_orbits);
+    ASSERT_EQ_INT(a.cells[c].complete, b.cells[c].complete);
+    for (int k = 0; k < a.cells[c].n_orbits; k++)
+      ASSERT_TRUE(a.cells[c].orbits[k].period == b.cells[c].orbits[k].period);
+  }
+  ss_map_free(&a);
+  ss_map_free(&b);
+}
+
+int main(int argc, char **argv) {
+  const char *env = getenv("SS_MAP_N");
+  int N = env ? atoi(env) : argc > 1 ? atoi(argv[1]) : 12;
+  test_sweep();
+  test_threads();
+  test_grid(N < 3 ? 3 : N);
+  TEST_DONE();
+}
