@@ -909,6 +909,88 @@ static int same_json(json_t *a, json_t *b, double rtol, char *where, size_t n) {
   return 0;
 }
 
+/* EVIDENCE: README "POST /map": a complete cell holds what /orbit finds
+ * for its parameters, the others at least what /orbit finds there too on
+ * this sweep (continued from their neighbours); the last line counts the
+ * cells, and fields selects the orbits' fields. */
+static void test_map_against_orbit(void) {
+  const char *P = "{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":%.17g,\"V\":1}";
+  const char *body =
+      "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,\"V\":1},"
+      "\"axes\":[{\"parameter\":\"ur\",\"from\":0.6,\"to\":0.9,\"n\":7}],"
+      "\"kind\":\"overshoot\",\"search_every\":3,"
+      "\"fields\":[\"period\",\"modes\",\"found_by\"]}";
+  http_resp r;
+  ASSERT_EQ_INT(http_do(PORT, "POST", "/map", JSON, body, &r), 0);
+  ASSERT_EQ_INT(r.status, 200);
+  ASSERT_TRUE(strstr(r.ctype, "application/x-ndjson") != NULL);
+  int lines = 0, complete = 0, compared = 0;
+  for (const char *t = r.body, *e; t && *t; t = e + 1) {
+    if (!(e = strchr(t, '\n')))
+      break;
+    json_t *l = json_loadb(t, (size_t)(e - t), 0, NULL);
+    ASSERT_TRUE(l != NULL);
+    if (!l)
+      break;
+    if (json_is_true(json_object_get(l, "done"))) {
+      ASSERT_EQ_INT(json_integer_value(json_object_get(l, "cells")), 7);
+      ASSERT_EQ_INT(json_integer_value(json_object_get(l, "complete")),
+                    complete);
+      json_decref(l);
+      lines++;
+      continue;
+    }
+    lines++;
+    double ur =
+        json_number_value(json_object_get(json_object_get(l, "at"), "ur"));
+    json_t *orbits = json_object_get(l, "orbits");
+    int is_complete = json_is_true(json_object_get(l, "complete"));
+    complete += is_complete;
+    /* only the fields asked for */
+    json_t *o0 = json_array_get(orbits, 0);
+    if (o0) {
+      ASSERT_EQ_INT((int)json_object_size(o0), 3);
+      ASSERT_TRUE(json_is_string(json_object_get(o0, "found_by")));
+    }
+    char req[512], params[160];
+    snprintf(params, sizeof params, P, ur);
+    snprintf(req, sizeof req,
+             "{\"params\":%s,\"kind\":\"overshoot\",\"finite_difference\":"
+             "false}",
+             params);
+    http_resp ro;
+    ASSERT_EQ_INT(http_do(PORT, "POST", "/orbit", JSON, req, &ro), 0);
+    ASSERT_EQ_INT(ro.status, 200);
+    json_t *oj = json_loads(ro.body, 0, NULL);
+    json_t *alone = json_object_get(oj, "orbits");
+    /* every orbit /orbit finds is in the cell; a complete cell has no
+     * fewer */
+    for (size_t k = 0; k < json_array_size(alone); k++) {
+      double per = json_number_value(
+          json_object_get(json_array_get(alone, k), "period"));
+      int found = 0;
+      for (size_t i = 0; i < json_array_size(orbits) && !found; i++)
+        found = fabs(json_number_value(
+                         json_object_get(json_array_get(orbits, i), "period")) -
+                     per) < 1e-9 * per;
+      if (!found)
+        TEST_FAIL_("/map at ur %.17g lacks the orbit of period %.17g that "
+                   "/orbit finds",
+                   ur, per);
+      test_checks_++;
+    }
+    if (is_complete)
+      ASSERT_EQ_INT((int)json_array_size(orbits), (int)json_array_size(alone));
+    compared += (int)json_array_size(alone);
+    json_decref(oj);
+    http_free(&ro);
+    json_decref(l);
+  }
+  ASSERT_EQ_INT(lines, 8);
+  ASSERT_TRUE(complete >= 3 && compared >= 5);
+  http_free(&r);
+}
+
 /* The lines of NDJSON text @a t as an array ordered by "index" (a batch's
  * items; a map's cells, whose index is an array, in their order), the line
  * without one last, "seconds" dropped; NULL when a line is not JSON. */
@@ -1552,6 +1634,7 @@ int main(int argc, char **argv) {
     PORT = d.port;
     test_endpoints();
     test_spec_examples();
+    test_map_against_orbit();
     test_bad_input();
     test_framing();
     ASSERT_EQ_INT(daemon_stop(&d), 0);
