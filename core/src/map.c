@@ -483,8 +483,9 @@ int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
   if (rc == SS_OK)
     rc = mp.stopped;
   for (int c = 0; c < map->n_cells; c++)
-    qsort(map->cells[c].orbits, (size_t)map->cells[c].n_orbits,
-          sizeof(ss_map_orbit), by_kind_period);
+    if (map->cells[c].n_orbits > 1)
+      qsort(map->cells[c].orbits, (size_t)map->cells[c].n_orbits,
+            sizeof(ss_map_orbit), by_kind_period);
   free(mp.w);
   free(mp.queue);
   if (rc == SS_ELIMIT_TIME)
