@@ -34,7 +34,8 @@ typedef struct api_limits {
   size_t max_batch_items; /**< requests in one /batch */
   size_t max_points;      /**< points of one /continue family */
   size_t max_map_cells;   /**< cells of one /map */
-  unsigned map_threads;   /**< threads of one /map's full searches */
+  size_t max_basin_cells; /**< cells of one /basins slice */
+  unsigned map_threads;   /**< threads of one /map or /basins */
 } api_limits;
 
 /** Fill @a l with the defaults documented in the README. */

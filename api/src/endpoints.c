@@ -59,6 +59,7 @@ void api_limits_default(api_limits *l) {
   l->max_batch_items = 10000;
   l->max_points = 2000;
   l->max_map_cells = 10000;
+  l->max_basin_cells = 1 << 20;
   l->map_threads = 1;
 }
 

@@ -42,6 +42,8 @@
     ep_continue_release)                                                       \
   X(MAP, "POST", "/map", "map", API_RUN_COMPUTE, ep_map_decode, ep_map_run,    \
     ep_map_encode, ep_map_release)                                             \
+  X(BASINS, "POST", "/basins", "basins", API_RUN_COMPUTE, ep_basins_decode,    \
+    ep_basins_run, ep_basins_encode, ep_basins_release)                        \
   X(BATCH, "POST", "/batch", "batch", API_RUN_BATCH, ep_batch_decode,          \
     ep_batch_run, ep_batch_encode, ep_batch_release)                           \
   X(HEALTH, "GET", "/health", "health", API_RUN_INLINE, ep_meta_decode,        \

@@ -1168,6 +1168,92 @@ SS_API int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
 /** Release what ss_map_run() allocated.  NULL-safe; zeroes @a map. */
 SS_API void ss_map_free(ss_map *map);
 
+/* ------------------------------------------------------------------------ */
+/* Basins of attraction                                                      */
+/* ------------------------------------------------------------------------ */
+
+/** Labels of ss_basins.labels that are not an attractor's index. */
+#define SS_BASIN_UNRESOLVED 255 /**< not landed within max_returns */
+#define SS_BASIN_PERPETUAL 254  /**< slips for ever, never returns */
+/** The most attractors a basin map tells apart. */
+#define SS_BASIN_MAX_ATTRACTORS 64
+/** The most returns to Sigma0 per period of an attractor. */
+#define SS_BASIN_MAX_TURNS 8
+
+/** A periodic attractor of a basin map. */
+typedef struct ss_basin_attractor {
+  ss_orbit orbit;      /**< feasible and stable, with its stability */
+  int from_simulation; /**< 0: the orbit search found it; 1: a motion that
+                            landed on no known one settled on it */
+  int n_points;        /**< its returns to Sigma0 per period (n_turns) */
+  double points[SS_BASIN_MAX_TURNS][2]; /**< those returns, (z1, z1') */
+  /** A motion whose return comes within this distance of one of the
+   *  points is labelled with the attractor: the contraction check passed
+   *  at that radius (see ss_basins_run()). */
+  double radius;
+  int iterations; /**< the periods the check needed to shrink the circle */
+  long cells;     /**< cells labelled with it */
+} ss_basin_attractor;
+
+/** Options of ss_basins_run(); zero-initialise, then set the slice. */
+typedef struct ss_basin_opts {
+  /** The slice: state variables vary[0] and vary[1] (0 x1, 1 x2, 2 x1',
+   *  3 x2') over n[a] values from from[a] to to[a] (n >= 1; different
+   *  ends when n > 1); the other two are those of state. */
+  int vary[2];
+  double from[2], to[2];
+  int n[2];
+  double state[4];
+  int max_period;  /**< of the orbit search and of attractors found by
+                        simulation, 1..SS_BASIN_MAX_TURNS (0: 4) */
+  int max_returns; /**< returns to Sigma0 per cell before it is unresolved
+                        (0: 500) */
+  int threads;     /**< the cells are simulated on this many threads (0: 1) */
+  double max_seconds; /**< time budget (0: none) */
+  /** Polled between rows: a non-zero answer stops with SS_ECANCELED. */
+  int (*cancelled)(void *cls);
+  void *cancel_cls;
+} ss_basin_opts;
+
+/** A basin map: the attractors, and a label per cell, row-major
+ *  (cell (i, j) at i * n[1] + j, i along vary[0]). */
+typedef struct ss_basins {
+  int n_attractors;
+  ss_basin_attractor *attractors; /**< malloc'd */
+  int n[2];
+  unsigned char *labels; /**< malloc'd; an attractor's index, or
+                              SS_BASIN_UNRESOLVED / SS_BASIN_PERPETUAL */
+  long unresolved, perpetual;
+  long returns;    /**< returns simulated in all */
+  int max_returns; /**< the most returns one cell took to land */
+} ss_basins;
+
+/**
+ * The basins of attraction over a two-dimensional slice of initial states.
+ * The attractors are the stable orbits ss_orbit_find() gives (all kinds,
+ * periods up to max_period); a cell's motion, simulated exactly event by
+ * event, is labelled with the attractor one of whose returns to Sigma0 it
+ * comes within the attractor's radius of.  The radius is certified by a
+ * contraction check: starting at 1e-2 of the scale (ur - us)/chi (and V),
+ * or at the orbit's smallest feasibility margin when smaller, it is
+ * quartered until, for some j <= 8, P^(k j) (k the attractor's turns) maps
+ * 64 points of the circle of that radius around each of its returns, 32 of
+ * the circle of half of it and the return itself to within 0.9 of it; a motion
+ * inside is then drawn in, and the label is final.  Cells that land on no known
+ * attractor within max_returns are simulated on (ss_attractor_from()); a
+ * periodic attractor they settle on is added (from_simulation) when it solves
+ * as a feasible stable orbit, and those cells are tried again; the rest stay
+ * unresolved.
+ * @return SS_OK; SS_EINVAL (bad options); SS_ELIMIT_TIME, SS_ECANCELED
+ *         (labels not reached are SS_BASIN_UNRESOLVED); SS_ENOMEM.
+ *         Release @a b with ss_basins_free() whatever happens.
+ */
+SS_API int ss_basins_run(const ss_model *m, const ss_basin_opts *opts,
+                         ss_basins *b, ss_diag *d);
+
+/** Release what ss_basins_run() allocated.  NULL-safe; zeroes @a b. */
+SS_API void ss_basins_free(ss_basins *b);
+
 #ifdef __cplusplus
 }
 #endif

@@ -101,6 +101,8 @@ static int set_limits(const char *path, api_limits *lim) {
       lim->max_points = (size_t)x;
     else if (!strcmp(k, "max_map_cells"))
       lim->max_map_cells = (size_t)x;
+    else if (!strcmp(k, "max_basin_cells"))
+      lim->max_basin_cells = (size_t)x;
     else {
       json_decref(j);
       return -1;

@@ -1,0 +1,385 @@
+/*
+ * basins.c: basins of attraction over a slice of initial states.
+ *
+ * Each cell's motion is simulated exactly, event by event, and watched at
+ * its returns to Sigma0 (stick -> slip).  A return within an attractor's
+ * certified radius of one of the attractor's own returns labels the cell.
+ *
+ * The radius: the Poincare map P^k of a stable orbit (k its turns) is a
+ * contraction near its fixed points, but only near them: the map is
+ * piecewise smooth, and a phase that appears or vanishes (a grazing) bounds
+ * the neighbourhood where the orbit's sequence, and so its contraction,
+ * holds.  The radius starts at 1e-2 of the problem's scale, or at the
+ * orbit's smallest feasibility margin when that is smaller, and is quartered
+ * (up to 8 times) until, for some j <= 8, P^(k j) maps 64 points of the
+ * circle of that radius around each of the orbit's returns, 32 of the circle
+ * of half of it and the return itself to within 0.9 of the radius: a check on
+ * samples, not a proof, but one made on the map itself rather than on its
+ * linearisation.  One period is often not enough: the Jacobian of a stable
+ * orbit is far from normal (the paper's overshoot orbit: spectral radius 0.20,
+ * norm 1.40; its period-3 orbit 0.31 and 6.4), so a circle is first stretched
+ * before it shrinks.
+ *
+ * The cells run on opts->threads threads, a row at a time.  Cells that
+ * land nowhere are then simulated on to find what they settle on; each
+ * periodic attractor found that way is solved as an orbit and, when it is a
+ * feasible stable one, added, and the unresolved cells are run again.
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal.h"
+
+#define BASIN_MAX_RETURNS 500
+#define BASIN_EVENTS_PER_RETURN 64
+#define BASIN_CIRCLE 64 /* points of the circle checked */
+#define BASIN_SHRINK 0.9
+#define BASIN_HALVINGS 8
+#define BASIN_MAX_ITERATIONS 8 /* periods the contraction may take */
+#define BASIN_MAX_THREADS 64
+#define BASIN_SETTLE_TURNS 5000
+
+typedef struct runner {
+  const ss_model *m;
+  const ss_basin_opts *o;
+  ss_basins *b;
+  int max_returns;
+  double t_start;
+  /* the rows to do, and the next one */
+  pthread_mutex_t lock;
+  int next_row;
+  int only_unresolved; /* the second pass */
+  int stopped;
+  long returns;
+  int max_seen;
+} runner;
+
+void ss_basins_free(ss_basins *b) {
+  if (!b)
+    return;
+  free(b->attractors);
+  free(b->labels);
+  memset(b, 0, sizeof *b);
+}
+
+static double axis_value(const ss_basin_opts *o, int a, int i) {
+  if (o->n[a] <= 1)
+    return o->from[a];
+  double k = (double)(o->n[a] - 1);
+  return (o->from[a] * (k - (double)i) + o->to[a] * (double)i) / k;
+}
+
+/* The return of an attractor within its radius of @a s, or -1. */
+static int landed(const ss_basins *b, const double s[2]) {
+  for (int a = 0; a < b->n_attractors; a++) {
+    const ss_basin_attractor *at = &b->attractors[a];
+    for (int k = 0; k < at->n_points; k++)
+      if (hypot(s[0] - at->points[k][0], s[1] - at->points[k][1]) < at->radius)
+        return a;
+  }
+  return -1;
+}
+
+/* Simulate from @a x0 until a return lands: the label; *returns the
+ * returns it took, s the last return. */
+static int follow(const runner *r, const double x0[4], int *returns,
+                  double s[2]) {
+  const ss_model *m = r->m;
+  ss_sim sim;
+  ss_event ev;
+  *returns = 0;
+  if (ss__sim_init(&sim, m, 0, x0, NULL) != SS_OK)
+    return SS_BASIN_UNRESOLVED;
+  size_t max_events = (size_t)(r->max_returns + 1) * BASIN_EVENTS_PER_RETURN;
+  for (size_t k = 0; k < max_events; k++) {
+    int rc = ss_sim_next_event(&sim, INFINITY, &ev);
+    if (rc == SS_HORIZON)
+      return SS_BASIN_PERPETUAL;
+    if (rc != SS_OK)
+      return SS_BASIN_UNRESOLVED;
+    if (ev.kind != SS_EVENT_TRANSITION || ev.from != SS_MODE_STICK ||
+        ev.to != SS_MODE_SLIP)
+      continue;
+    s[0] = ev.x[0] - m->d0[0];
+    s[1] = ev.x[2];
+    int a = landed(r->b, s);
+    ++*returns;
+    if (a >= 0)
+      return a;
+    if (*returns >= r->max_returns)
+      return SS_BASIN_UNRESOLVED;
+  }
+  return SS_BASIN_UNRESOLVED;
+}
+
+static int over_budget(runner *r) {
+  if (!r->stopped && r->o->max_seconds > 0 &&
+      ss__now() - r->t_start > r->o->max_seconds)
+    r->stopped = SS_ELIMIT_TIME;
+  if (!r->stopped && r->o->cancelled && r->o->cancelled(r->o->cancel_cls))
+    r->stopped = SS_ECANCELED;
+  return r->stopped != 0;
+}
+
+static void *worker(void *arg) {
+  runner *r = arg;
+  const ss_basin_opts *o = r->o;
+  int n1 = o->n[1];
+  long returns = 0;
+  int max_seen = 0;
+  for (;;) {
+    pthread_mutex_lock(&r->lock);
+    int i = -1;
+    if (!over_budget(r) && r->next_row < o->n[0])
+      i = r->next_row++;
+    pthread_mutex_unlock(&r->lock);
+    if (i < 0)
+      break;
+    for (int j = 0; j < n1; j++) {
+      unsigned char *lab = &r->b->labels[(size_t)i * (size_t)n1 + (size_t)j];
+      if (r->only_unresolved && *lab != SS_BASIN_UNRESOLVED)
+        continue;
+      double x[4], s[2];
+      memcpy(x, o->state, sizeof x);
+      x[o->vary[0]] = axis_value(o, 0, i);
+      x[o->vary[1]] = axis_value(o, 1, j);
+      int n = 0, l = follow(r, x, &n, s);
+      *lab = (unsigned char)l;
+      returns += n;
+      if (n > max_seen && l < SS_BASIN_MAX_ATTRACTORS)
+        max_seen = n;
+    }
+  }
+  pthread_mutex_lock(&r->lock);
+  r->returns += returns;
+  if (max_seen > r->max_seen)
+    r->max_seen = max_seen;
+  pthread_mutex_unlock(&r->lock);
+  return NULL;
+}
+
+static void run_rows(runner *r) {
+  pthread_t th[BASIN_MAX_THREADS];
+  int nt = r->o->threads < 1                   ? 1
+           : r->o->threads > BASIN_MAX_THREADS ? BASIN_MAX_THREADS
+                                               : r->o->threads;
+  int started = 0;
+  r->next_row = 0;
+  for (int t = 1; t < nt; t++)
+    if (pthread_create(&th[started], NULL, worker, r) == 0)
+      started++;
+  worker(r);
+  for (int t = 0; t < started; t++)
+    pthread_join(th[t], NULL);
+}
+
+/* The returns of the orbit @a o (its start and P of it, k - 1 times), and
+ * the certified radius; 0, or -1 when the orbit cannot be an attractor
+ * here (more turns than room, or the check fails at every radius). */
+static int certify(const ss_model *m, const ss_orbit *o,
+                   ss_basin_attractor *a) {
+  int k = o->n_turns;
+  if (k < 1 || k > SS_BASIN_MAX_TURNS)
+    return -1;
+  a->orbit = *o;
+  a->n_points = k;
+  a->points[0][0] = o->z0[0];
+  a->points[0][1] = o->z0[2];
+  size_t ev = BASIN_EVENTS_PER_RETURN * (size_t)k;
+  for (int i = 1; i < k; i++)
+    if (ss_poincare(m, a->points[i - 1], 1, ev, a->points[i], NULL, NULL,
+                    NULL) != SS_OK)
+      return -1;
+  const ss_params *p = &m->p;
+  double scale = fmax(p->V, (p->ur - p->us) / p->chi);
+  /* no larger than the orbit's smallest feasibility margin: farther out a
+   * phase may appear or vanish, and the map change its form */
+  double rad = 1e-2 * scale;
+  if (o->min_margin.value > 0 && o->min_margin.value < rad)
+    rad = o->min_margin.value;
+  for (int h = 0; h < BASIN_HALVINGS; h++, rad *= 0.25)
+    for (int it = 1; it <= BASIN_MAX_ITERATIONS; it++) {
+      int ok = 1;
+      /* the circle, a circle of half the radius, and the centre */
+      for (int i = 0; i < k && ok; i++)
+        for (int q = 0; q <= BASIN_CIRCLE + BASIN_CIRCLE / 2 && ok; q++) {
+          int outer = q < BASIN_CIRCLE;
+          double ang = outer ? 6.283185307179586 * q / BASIN_CIRCLE
+                             : 12.566370614359172 * (q - BASIN_CIRCLE + 0.5) /
+                                   BASIN_CIRCLE;
+          double u = q == BASIN_CIRCLE + BASIN_CIRCLE / 2 ? 0
+                     : outer                              ? rad
+                                                          : 0.5 * rad;
+          double s[2] = {a->points[i][0] + u * cos(ang),
+                         a->points[i][1] + u * sin(ang)},
+                 e[2];
+          ok = ss_poincare(m, s, k * it, ev * (size_t)it, e, NULL, NULL,
+                           NULL) == SS_OK &&
+               hypot(e[0] - a->points[i][0], e[1] - a->points[i][1]) <
+                   BASIN_SHRINK * rad;
+        }
+      if (ok) {
+        a->radius = rad;
+        a->iterations = it;
+        return 0;
+      }
+    }
+  return -1;
+}
+
+/* Is @a o (a stable orbit) one of the attractors already? */
+static int known(const ss_basins *b, const ss_orbit *o) {
+  double s[2] = {o->z0[0], o->z0[2]};
+  int a = landed(b, s);
+  return a >= 0 && b->attractors[a].n_points == o->n_turns;
+}
+
+static int add_attractor(const ss_model *m, ss_basins *b, const ss_orbit *o,
+                         int from_simulation) {
+  if (!o->stab.stable || o->stab.marginal || known(b, o) ||
+      b->n_attractors == SS_BASIN_MAX_ATTRACTORS)
+    return 0;
+  ss_basin_attractor a;
+  memset(&a, 0, sizeof a);
+  if (certify(m, o, &a) != 0)
+    return 0;
+  a.from_simulation = from_simulation;
+  b->attractors[b->n_attractors++] = a;
+  return 1;
+}
+
+/* The cells still unresolved, simulated on from their last return: the
+ * periodic attractors they settle on, as orbits.  1 if one was added. */
+static int from_simulation(runner *r) {
+  const ss_basin_opts *o = r->o;
+  ss_basins *b = r->b;
+  int added = 0, tried = 0;
+  for (int i = 0; i < o->n[0] && !over_budget(r); i++)
+    for (int j = 0; j < o->n[1] && tried < 64; j++) {
+      size_t c = (size_t)i * (size_t)o->n[1] + (size_t)j;
+      if (b->labels[c] != SS_BASIN_UNRESOLVED)
+        continue;
+      double x[4], s[2];
+      memcpy(x, o->state, sizeof x);
+      x[o->vary[0]] = axis_value(o, 0, i);
+      x[o->vary[1]] = axis_value(o, 1, j);
+      int n = 0;
+      if (follow(r, x, &n, s) != SS_BASIN_UNRESOLVED || n == 0)
+        continue;
+      tried++;
+      ss_attractor at;
+      if (ss_attractor_from(r->m, s, BASIN_SETTLE_TURNS, r->o->max_period,
+                            &at) != SS_OK ||
+          !at.found || at.n_phases > SS_MAX_PHASES)
+        continue;
+      ss_orbit orb;
+      if (ss_orbit_solve(r->m, at.n_phases, at.modes, at.durations, NULL, &orb,
+                         NULL) != SS_OK)
+        continue;
+      orb.source = SS_SOURCE_SIMULATION;
+      if (add_attractor(r->m, b, &orb, 1)) {
+        added = 1;
+        /* this cell and those like it are run again */
+        return added;
+      }
+    }
+  return added;
+}
+
+int ss_basins_run(const ss_model *m, const ss_basin_opts *opts, ss_basins *b,
+                  ss_diag *d) {
+  if (!b)
+    return ss__fail(d, SS_EINVAL, "basins", 0, "missing output");
+  memset(b, 0, sizeof *b);
+  if (!m || !opts)
+    return ss__fail(d, SS_EINVAL, "basins", 0, "missing model or options");
+  ss_basin_opts o = *opts;
+  if (o.max_period == 0)
+    o.max_period = 4;
+  if (o.max_period < 1 || o.max_period > SS_BASIN_MAX_TURNS)
+    return ss__fail(d, SS_EINVAL, "max_period", o.max_period,
+                    "max_period is 1..%d", SS_BASIN_MAX_TURNS);
+  if (o.max_returns < 0)
+    return ss__fail(d, SS_EINVAL, "max_returns", o.max_returns,
+                    "max_returns is >= 0");
+  for (int a = 0; a < 2; a++) {
+    if (o.vary[a] < 0 || o.vary[a] > 3 || o.n[a] < 1 || !isfinite(o.from[a]) ||
+        !isfinite(o.to[a]) || (o.n[a] > 1 && !(o.from[a] != o.to[a])))
+      return ss__fail(d, SS_EINVAL, "axes", a,
+                      "axis %d: a state variable 0..3, n >= 1, finite ends "
+                      "that differ when n > 1",
+                      a);
+  }
+  if (o.vary[0] == o.vary[1])
+    return ss__fail(d, SS_EINVAL, "axes", 1,
+                    "the two axes vary the same state variable");
+  for (int k = 0; k < 4; k++)
+    if (!isfinite(o.state[k]))
+      return ss__fail(d, SS_EINVAL, "state", k, "the state must be finite");
+  if ((double)o.n[0] * (double)o.n[1] > 1e9)
+    return ss__fail(d, SS_EINVAL, "axes", 0, "too many cells");
+  size_t cells = (size_t)o.n[0] * (size_t)o.n[1];
+  b->n[0] = o.n[0];
+  b->n[1] = o.n[1];
+  b->attractors = calloc(SS_BASIN_MAX_ATTRACTORS, sizeof *b->attractors);
+  b->labels = malloc(cells);
+  if (!b->attractors || !b->labels) {
+    ss_basins_free(b);
+    return ss__fail(d, SS_ENOMEM, "", 0, "out of memory for the basins");
+  }
+  memset(b->labels, SS_BASIN_UNRESOLVED, cells);
+  runner r;
+  memset(&r, 0, sizeof r);
+  r.m = m;
+  r.o = &o;
+  r.b = b;
+  r.max_returns = o.max_returns ? o.max_returns : BASIN_MAX_RETURNS;
+  r.t_start = ss__now();
+  pthread_mutex_init(&r.lock, NULL);
+  /* the attractors the search names */
+  ss_orbit found[32];
+  int nf = 0;
+  ss_orbit_opts oo;
+  memset(&oo, 0, sizeof oo);
+  oo.max_period = o.max_period;
+  oo.max_seconds = o.max_seconds;
+  oo.cancelled = o.cancelled;
+  oo.cancel_cls = o.cancel_cls;
+  int rc = ss_orbit_find(m, &oo, found, 32, &nf, NULL, d);
+  if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED)
+    r.stopped = rc;
+  else if (rc) {
+    pthread_mutex_destroy(&r.lock);
+    return rc;
+  }
+  for (int i = 0; i < nf; i++)
+    add_attractor(m, b, &found[i], 0);
+  /* the cells; then those that land nowhere, after each new attractor */
+  r.only_unresolved = 0;
+  if (!r.stopped)
+    run_rows(&r);
+  while (!over_budget(&r) && from_simulation(&r)) {
+    r.only_unresolved = 1;
+    run_rows(&r);
+  }
+  pthread_mutex_destroy(&r.lock);
+  b->returns = r.returns;
+  b->max_returns = r.max_seen;
+  for (size_t c = 0; c < cells; c++) {
+    unsigned char l = b->labels[c];
+    if (l == SS_BASIN_UNRESOLVED)
+      b->unresolved++;
+    else if (l == SS_BASIN_PERPETUAL)
+      b->perpetual++;
+    else
+      b->attractors[l].cells++;
+  }
+  if (r.stopped == SS_ELIMIT_TIME)
+    return ss__fail(d, SS_ELIMIT_TIME, "max_seconds", o.max_seconds,
+                    "the basins ran out of their %g s budget", o.max_seconds);
+  if (r.stopped == SS_ECANCELED)
+    return ss__fail(d, SS_ECANCELED, "", 0, "the basins were cancelled");
+  return SS_OK;
+}
