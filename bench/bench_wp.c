@@ -5,7 +5,9 @@
  * libstickslip and checked by simulation), run N = 1, 100, 1000 periods with
  *  (a) libstickslip's exact event-driven simulation,
  *  (b) GSL odeiv2 steppers on the physical equations with each switching
- *      event located on its step by bisection (tests/ref),
+ *      event located on its step by bisection (tests/ref), and rk8pd with
+ *      each event located inside its accepted step by Hermite interpolation
+ *      (the strongest way to use a general-purpose stepper here),
  *  (c) regularized friction u = (us + (ur-us) exp(-(w/ws)^2)) tanh(w/eps),
  *      w = V - x2', with the stiff msbdf stepper and no events; and the plain
  *      u = us tanh(w/eps),
@@ -172,6 +174,171 @@ static void run_ref(int N, const char *name, const gsl_odeiv2_step_type *type,
   for (int k = 1; k < reps; k++) {
     t0 = cpu_now();
     ref_simulate(&rp, 0, X0, REF_SLIP, N * T, &o, ev, cap, xe, &me);
+    tv[k] = cpu_now() - t0;
+  }
+  w->cpu = median(tv, reps);
+  free(tv);
+  free(ev);
+}
+
+/* (b') the strongest use of a general-purpose stepper: rk8pd with each
+ * event located inside the accepted step, not by integrating again.  The
+ * switching function is linear in the state, so on the cubic Hermite
+ * interpolant of the step (from y and y' at both ends, no extra right-hand
+ * side) it is a cubic, whose first sign change is found by bisection; the
+ * state there is reached by one more rk8pd step from the step's start, and
+ * the time corrected once by Newton on the switching function (a second
+ * step).  After an event the step size carries on (clamped to the phase's
+ * scale), instead of restarting small. */
+typedef struct dense_ctx {
+  double chi, eta, us, ur, V;
+  int mode; /* REF_SLIP, REF_OVERSHOOT, REF_STICK */
+} dense_ctx;
+
+static int dense_rhs(double t, const double y[], double f[], void *vp) {
+  const dense_ctx *c = vp;
+  (void)t;
+  f[0] = y[2];
+  f[1] = y[3];
+  f[2] = -y[0] + c->chi * y[1];
+  f[3] = c->mode == REF_STICK ? 0
+                              : -c->chi * c->eta * (y[1] - y[0]) +
+                                    c->eta * (c->mode == REF_SLIP ? c->us
+                                                                  : -c->us);
+  return GSL_SUCCESS;
+}
+
+/* The switching function @a which of the mode (negative inside), and its
+ * rate along the flow f. */
+static double dense_g(const dense_ctx *c, int which, const double y[4]) {
+  if (c->mode == REF_SLIP)
+    return y[3] - c->V;
+  if (c->mode == REF_OVERSHOOT)
+    return c->V - y[3];
+  double f = c->chi * (y[1] - y[0]);
+  return which == 0 ? f - c->ur : -c->ur - f;
+}
+
+static double dense_gdot(const dense_ctx *c, int which, const double f[4]) {
+  if (c->mode == REF_SLIP)
+    return f[3];
+  if (c->mode == REF_OVERSHOOT)
+    return -f[3];
+  double d = c->chi * (f[1] - f[0]);
+  return which == 0 ? d : -d;
+}
+
+static long dense_simulate(const dense_ctx *c0, double t_end, double tol,
+                           ref_event *ev, size_t cap, double y[4]) {
+  dense_ctx c = *c0;
+  gsl_odeiv2_system sys = {dense_rhs, NULL, 4, &c};
+  gsl_odeiv2_step *s = gsl_odeiv2_step_alloc(gsl_odeiv2_step_rk8pd, 4);
+  gsl_odeiv2_control *ctl = gsl_odeiv2_control_y_new(tol, tol);
+  gsl_odeiv2_evolve *e = gsl_odeiv2_evolve_alloc(4);
+  double t = 0, h = 1e-2;
+  long n = 0;
+  int rc = GSL_SUCCESS;
+  while (t < t_end && rc == GSL_SUCCESS) {
+    double yp[4], fp[4], tp = t;
+    memcpy(yp, y, sizeof yp);
+    if (c.mode == REF_STICK)
+      y[3] = yp[3] = c.V;
+    rc = gsl_odeiv2_evolve_apply(e, ctl, s, &sys, &t, t_end, &h, y);
+    if (rc != GSL_SUCCESS)
+      break;
+    int which = -1;
+    for (int k = (c.mode == REF_STICK ? 1 : 0); k >= 0; k--)
+      if (dense_g(&c, k, y) >= 0)
+        which = k;
+    if (which < 0)
+      continue;
+    /* the cubic g(tp + th dt) on the Hermite interpolant */
+    double f1[4], dt = t - tp;
+    dense_rhs(tp, yp, fp, &c);
+    dense_rhs(t, y, f1, &c);
+    double g0 = dense_g(&c, which, yp), g1 = dense_g(&c, which, y);
+    double d0 = dt * dense_gdot(&c, which, fp),
+           d1 = dt * dense_gdot(&c, which, f1);
+    double lo = 0, hi = 1;
+    for (int it = 0; it < 60; it++) {
+      double th = 0.5 * (lo + hi), a = th * th * (3 - 2 * th);
+      double gv = (1 - a) * g0 + a * g1 + th * (1 - th) * (1 - th) * d0 -
+                  th * th * (1 - th) * d1;
+      if (gv >= 0)
+        hi = th;
+      else
+        lo = th;
+    }
+    double te = tp + hi * dt, ye[4], yerr[4];
+    for (int pass = 0; pass < 2; pass++) {
+      memcpy(ye, yp, sizeof ye);
+      gsl_odeiv2_step_apply(s, tp, te - tp, ye, yerr, fp, NULL, &sys);
+      if (pass == 0) {
+        double fe[4];
+        dense_rhs(te, ye, fe, &c);
+        double gd = dense_gdot(&c, which, fe);
+        if (gd != 0)
+          te -= dense_g(&c, which, ye) / gd;
+      }
+    }
+    memcpy(y, ye, sizeof ye);
+    t = te;
+    double f = c.chi * (y[1] - y[0]);
+    int to = c.mode == REF_SLIP        ? (f < -c.ur ? REF_OVERSHOOT : REF_STICK)
+             : c.mode == REF_OVERSHOOT ? (f > c.ur ? REF_SLIP : REF_STICK)
+             : which == 0              ? REF_SLIP
+                                       : REF_OVERSHOOT;
+    if (c.mode != REF_STICK || to == REF_STICK)
+      y[3] = c.V;
+    if ((size_t)n < cap) {
+      ev[n].t = t;
+      ev[n].from = c.mode;
+      ev[n].to = to;
+      memcpy(ev[n].x, y, sizeof ev[n].x);
+    }
+    n++;
+    c.mode = to;
+    gsl_odeiv2_evolve_reset(e);
+    gsl_odeiv2_step_reset(s);
+    h = fmin(h, 0.5);
+  }
+  gsl_odeiv2_evolve_free(e);
+  gsl_odeiv2_control_free(ctl);
+  gsl_odeiv2_step_free(s);
+  return rc == GSL_SUCCESS ? n : -1;
+}
+
+static void run_dense(int N, double tol) {
+  dense_ctx c = {M.p.chi, M.p.eta, M.p.us, M.p.ur, M.p.V, REF_SLIP};
+  size_t cap = (size_t)(3 * N + 16);
+  ref_event *ev = malloc(cap * sizeof *ev);
+  double y[4];
+  memcpy(y, X0, sizeof y);
+  double t0 = cpu_now();
+  long n = dense_simulate(&c, N * T, tol, ev, cap, y);
+  double one = cpu_now() - t0;
+  row *w = &rows[nrows++];
+  snprintf(w->method, sizeof w->method, "GSL rk8pd + Hermite events");
+  snprintf(w->setting, sizeof w->setting, "tol = %.0e", tol);
+  w->N = N;
+  w->err_state = n < 0 ? NAN : state_err(y);
+  w->err_switch = 0;
+  w->wrong_branch = n < 3 * N - 1 || n > 3 * N;
+  for (long i = 0; i < n && i < (long)cap; i++) {
+    int want = i % 3 == 0 ? REF_SLIP : i % 3 == 1 ? REF_OVERSHOOT : REF_STICK;
+    if (ev[i].from != want)
+      w->wrong_branch = 1;
+    if (!w->wrong_branch && i < 3 * N - 1)
+      w->err_switch =
+          fmax(w->err_switch, fabs(ev[i].t - exact_event_time((int)i)));
+  }
+  int reps = reps_for(one);
+  double *tv = malloc((size_t)(reps + 1) * sizeof *tv);
+  tv[0] = one;
+  for (int k = 1; k < reps; k++) {
+    memcpy(y, X0, sizeof y);
+    t0 = cpu_now();
+    dense_simulate(&c, N * T, tol, ev, cap, y);
     tv[k] = cpu_now() - t0;
   }
   w->cpu = median(tv, reps);
@@ -453,6 +620,13 @@ int main(int argc, char **argv) {
         printf("%s tol %.0e N=%d: err %.2e cpu %.3e\n", st[s].name, tols[k], N,
                rows[nrows - 1].err_state, rows[nrows - 1].cpu);
       }
+    for (int k = 0; k < 3; k++) {
+      const double dtol[] = {1e-8, 1e-10, 1e-12};
+      run_dense(N, dtol[k]);
+      printf("rk8pd + Hermite tol %.0e N=%d: err %.2e switch %.2e cpu %.3e\n",
+             dtol[k], N, rows[nrows - 1].err_state, rows[nrows - 1].err_switch,
+             rows[nrows - 1].cpu);
+    }
     const double hs[] = {1e-2, 1e-3};
     for (int k = 0; k < 2 && N <= 100; k++) {
       run_ref(N, "rk4", gsl_odeiv2_step_rk4, 0, hs[k]);

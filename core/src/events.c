@@ -265,13 +265,18 @@ int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
     }
     a = escape(g, &b, t0, tol, v);
   }
+  /* v holds g at t0 already when the search starts there */
+  int fresh = a == t0;
   for (long it = 0; it < MAX_STEPS; it++) {
     if (a >= tmax) {
       *t = tmax;
       return SS_HORIZON;
     }
-    ss_trig_eval(g, a, 2, v);
-    tol = tol_at(g, &b, a);
+    if (!fresh) {
+      ss_trig_eval(g, a, 2, v);
+      tol = tol_at(g, &b, a);
+    }
+    fresh = 0;
     if (v[0] >= -tol)
       return classify(g, &b, a, tol, t);
     /* Near a simple root: if the Newton step d = -g/g' is short enough that
