@@ -201,10 +201,10 @@ static int dense_rhs(double t, const double y[], double f[], void *vp) {
   f[0] = y[2];
   f[1] = y[3];
   f[2] = -y[0] + c->chi * y[1];
-  f[3] = c->mode == REF_STICK ? 0
-                              : -c->chi * c->eta * (y[1] - y[0]) +
-                                    c->eta * (c->mode == REF_SLIP ? c->us
-                                                                  : -c->us);
+  f[3] = c->mode == REF_STICK
+             ? 0
+             : -c->chi * c->eta * (y[1] - y[0]) +
+                   c->eta * (c->mode == REF_SLIP ? c->us : -c->us);
   return GSL_SUCCESS;
 }
 

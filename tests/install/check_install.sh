@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# The installation works as a user meets it: install the build into a fresh
+# prefix, then build the README's example program against the installed
+# copy, once with pkg-config and once with find_package(stickslip), and run
+# both; check what else is installed (the static library beside a shared
+# one, the daemon, its man page, the systemd unit).
+# Usage: check_install.sh BUILD_DIR SOURCE_DIR C_COMPILER CMAKE
+set -euo pipefail
+build=$1 src=$2 cc=$3 cmake=$4
+want="slip 4.497497  overshoot 2.722666  stick 3.051267"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+prefix=$tmp/prefix
+"$cmake" --install "$build" --prefix "$prefix" >/dev/null
+libdir=$(dirname "$(find "$prefix" -name stickslip.pc -print -quit)")/..
+libdir=$(cd "$libdir" && pwd)
+test -f "$prefix/include/stickslip.h"
+test -f "$libdir/libstickslip.a" || { echo "no static library"; exit 1; }
+test -f "$prefix/share/doc/stickslip/LICENSE"
+
+# pkg-config; a static-only installation needs the private libraries
+export PKG_CONFIG_PATH=$libdir/pkgconfig
+static=--static
+if [ -e "$libdir/libstickslip.so" ]; then
+  static=
+  soname=$(readelf -d "$libdir/libstickslip.so" | sed -n 's/.*SONAME.*\[\(.*\)\]/\1/p')
+  case $soname in libstickslip.so.[0-9]*) ;; *) echo "soname $soname"; exit 1 ;; esac
+fi
+# shellcheck disable=SC2046,SC2086
+"$cc" -o "$tmp/example_pc" "$src/tests/example/example.c" \
+  $(pkg-config $static --cflags --libs stickslip) -Wl,-rpath,"$libdir"
+out=$("$tmp/example_pc")
+case $out in *"$want"*) ;; *) echo "pkg-config build printed: $out"; exit 1 ;; esac
+echo "pkg-config: $(pkg-config --modversion stickslip), $([ -n "$static" ] && echo static || echo shared)"
+
+# find_package
+mkdir "$tmp/consumer"
+cp "$src/tests/example/example.c" "$tmp/consumer/"
+cat >"$tmp/consumer/CMakeLists.txt" <<'CM'
+cmake_minimum_required(VERSION 3.16)
+project(consumer C)
+find_package(stickslip 0.2 REQUIRED)
+add_executable(example example.c)
+target_link_libraries(example PRIVATE stickslip::stickslip)
+CM
+"$cmake" -S "$tmp/consumer" -B "$tmp/consumer/build" -DCMAKE_C_COMPILER="$cc" \
+  -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_RPATH="$libdir" >/dev/null
+"$cmake" --build "$tmp/consumer/build" >/dev/null
+out=$("$tmp/consumer/build/example")
+case $out in *"$want"*) ;; *) echo "find_package build printed: $out"; exit 1 ;; esac
+echo "find_package: ok"
+
+# the daemon, when it was built: it runs from the prefix, with its man page
+# and a unit systemd accepts
+if [ -x "$prefix/bin/stickslipd" ]; then
+  "$prefix/bin/stickslipd" --version
+  man -l "$prefix/share/man/man1/stickslipd.1" >/dev/null 2>&1 ||
+    { command -v man >/dev/null && { echo "man page"; exit 1; }; }
+  # every flag of --help is in the man page
+  for f in $("$prefix/bin/stickslipd" --help 2>&1 | grep -o -- '--[a-z-]*' | sort -u); do
+    grep -q -- "$(echo "$f" | sed 's/-/\\\\-/g')" "$prefix/share/man/man1/stickslipd.1" ||
+      { echo "the man page lacks $f"; exit 1; }
+  done
+  unit=$(find "$prefix" -name stickslipd.service -print -quit)
+  test -n "$unit"
+  grep -q "ExecStart=$prefix/bin/stickslipd" "$unit"
+  if command -v systemd-analyze >/dev/null; then
+    MANPATH=$prefix/share/man: systemd-analyze verify "$unit"
+    echo "systemd-analyze verify: ok"
+  fi
+fi
+echo "install: ok"
