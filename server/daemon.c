@@ -78,6 +78,10 @@ struct srv_daemon {
   atomic_int monitor_stop;
   atomic_ulong conns_started; /* taken up by libmicrohttpd */
   int monitor_running;
+  /* request ids: a per-start random seed mixed with a counter */
+  unsigned long long rid_seed;
+  atomic_ullong rid_next;
+  char spec_etag[24]; /* of GET /openapi.json */
 };
 
 enum { R_FRESH = 0, R_ANSWERED = 1 };
@@ -99,6 +103,9 @@ typedef struct req {
   int over_budget; /* the body came while the memory budget was spent */
   long held;       /* bytes of body and answer counted against the budget */
   double t0;
+  size_t bytes;                 /* of the answer's body, as sent */
+  char rid[SRV_REQUEST_ID + 1]; /* X-Request-Id, given or made */
+  const char *etag;             /* a validator for a static answer, or NULL */
   char method[8];
   char path[96];
   char key[SRV_CLIENT_KEY]; /* the client, for the pool's queues */
@@ -133,6 +140,13 @@ static enum MHD_Result send_body(struct MHD_Connection *c, req *r, int status,
   }
   MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
   MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+  if (r->rid[0])
+    MHD_add_response_header(resp, "X-Request-Id", r->rid);
+  if (r->etag) {
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, r->etag);
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CACHE_CONTROL,
+                            "public, max-age=300");
+  }
   if (retry_after)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "1");
   if (allow)
@@ -142,6 +156,7 @@ static enum MHD_Result send_body(struct MHD_Connection *c, req *r, int status,
   ok = MHD_queue_response(c, (unsigned)status, resp);
   MHD_destroy_response(resp);
   r->status = status;
+  r->bytes = len;
   r->done = 1;
   return ok;
 }
@@ -157,29 +172,52 @@ static int over_budget(const struct srv_daemon *d) {
   return srv_metrics_held(d->metrics, 0) >= (long)d->cfg.memory_mb << 20;
 }
 
+/* A streamed answer and the request it answers, whose byte count it keeps
+ * (libmicrohttpd reads the stream only while the request is in progress;
+ * it may free it after the request has completed). */
+typedef struct sstream {
+  api_stream *s;
+  req *r;
+} sstream;
+
 static ssize_t stream_read(void *cls, uint64_t pos, char *buf, size_t max) {
+  sstream *st = cls;
   (void)pos;
-  long n = api_stream_read(cls, buf, max);
+  long n = api_stream_read(st->s, buf, max);
+  if (n > 0)
+    st->r->bytes += (size_t)n;
   return n < 0   ? MHD_CONTENT_READER_END_WITH_ERROR
          : n > 0 ? (ssize_t)n
                  : MHD_CONTENT_READER_END_OF_STREAM;
 }
 
-static void stream_free(void *cls) { api_stream_free(cls); }
+static void stream_free(void *cls) {
+  sstream *st = cls;
+  api_stream_free(st->s);
+  free(st);
+}
 
 /* A large answer, written a chunk at a time as the client reads it. */
 static enum MHD_Result send_stream(struct MHD_Connection *c, req *r,
                                    api_response *ar) {
-  struct MHD_Response *resp = MHD_create_response_from_callback(
-      MHD_SIZE_UNKNOWN, STREAM_CHUNK, stream_read, ar->stream, stream_free);
+  sstream *st = malloc(sizeof *st);
+  struct MHD_Response *resp =
+      st ? MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, STREAM_CHUNK,
+                                             stream_read, st, stream_free)
+         : NULL;
   enum MHD_Result ok;
   if (!resp) {
+    free(st);
     api_response_free(ar);
     return MHD_NO;
   }
+  st->s = ar->stream;
+  st->r = r;
   ar->stream = NULL; /* the response owns it now */
   MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ar->content_type);
   MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+  if (r->rid[0])
+    MHD_add_response_header(resp, "X-Request-Id", r->rid);
   ok = MHD_queue_response(c, (unsigned)ar->status, resp);
   MHD_destroy_response(resp);
   r->status = ar->status;
@@ -190,9 +228,32 @@ static enum MHD_Result send_stream(struct MHD_Connection *c, req *r,
 /* An answer of the api: a 503 always says when to come back, and a 413,
  * a 503 or a refused framing closes the connection.  What the answer holds
  * counts against the memory budget until the request completes. */
+/* A problem's body with the request's id as a member "request_id" (an
+ * extension member of RFC 9457), so that a client's report of it can be
+ * found in the log. */
+static void problem_with_id(const req *r, api_response *ar) {
+  if (!r->rid[0] || !ar->body || ar->len < 2 || ar->body[0] != '{' ||
+      strcmp(ar->content_type, "application/problem+json") != 0)
+    return;
+  size_t n = ar->len + strlen(r->rid) + 20;
+  char *b = malloc(n);
+  if (!b)
+    return;
+  int k = snprintf(b, n, "{\"request_id\":\"%s\",%s", r->rid, ar->body + 1);
+  if (k < 0 || (size_t)k >= n) {
+    free(b);
+    return;
+  }
+  free(ar->body);
+  ar->body = b;
+  ar->held += (size_t)k - ar->len;
+  ar->len = (size_t)k;
+}
+
 static enum MHD_Result send_api(struct MHD_Connection *c, req *r,
                                 api_response *ar, const char *allow) {
   int busy = ar->status == 503;
+  problem_with_id(r, ar);
   if (r->d)
     hold(r->d, r, (long)ar->held);
   if (ar->stream)
@@ -388,6 +449,7 @@ typedef struct batch {
   int refs;    /* the response, and each item in the pool */
   long held;   /* bytes counted against the memory budget */
   double t0;
+  size_t sent; /* bytes of the answer written */
 } batch;
 
 static void batch_hold(batch *b, long bytes) {
@@ -609,6 +671,7 @@ static ssize_t batch_read(void *cls, uint64_t pos, char *buf, size_t max) {
       break;
   }
   ssize_t ret = (ssize_t)got;
+  b->sent += got;
   if (got == 0 && b->last)
     ret = MHD_CONTENT_READER_END_OF_STREAM;
   else if (got == 0) {
@@ -685,6 +748,8 @@ static enum MHD_Result batch_start(struct srv_daemon *d,
   MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
                           "application/x-ndjson");
   MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+  if (r->rid[0])
+    MHD_add_response_header(resp, "X-Request-Id", r->rid);
   r->batch = b;
   pthread_mutex_lock(&b->mu);
   dispatch(b);
@@ -793,6 +858,34 @@ static enum MHD_Result too_large(struct srv_daemon *d, struct MHD_Connection *c,
 
 /* The first call of a request: its headers are in.  Route it, and refuse
  * now what can be refused from the headers alone. */
+/* The request's id: its X-Request-Id when that is 1 to SRV_REQUEST_ID
+ * characters of [A-Za-z0-9._:-] (what a proxy or a client makes), else one
+ * made here, 16 hex digits unique within the process's life. */
+static void request_id(struct srv_daemon *d, struct MHD_Connection *c, req *r) {
+  const char *h =
+      MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Request-Id");
+  size_t n = h ? strlen(h) : 0;
+  int ok = n >= 1 && n <= SRV_REQUEST_ID;
+  for (size_t i = 0; ok && i < n; i++) {
+    char ch = h[i];
+    ok = (ch >= 'A' && ch <= 'Z') || (ch >= 'a' && ch <= 'z') ||
+         (ch >= '0' && ch <= '9') || ch == '.' || ch == '_' || ch == ':' ||
+         ch == '-';
+  }
+  if (ok) {
+    memcpy(r->rid, h, n + 1);
+    return;
+  }
+  /* splitmix64 of seed + counter: distinct for distinct counters */
+  unsigned long long z =
+      d->rid_seed +
+      0x9e3779b97f4a7c15ULL * (atomic_fetch_add(&d->rid_next, 1) + 1);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  z ^= z >> 31;
+  snprintf(r->rid, sizeof r->rid, "%016llx", z);
+}
+
 static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
                              req *r, const char *url, const char *method) {
   size_t ep;
@@ -807,6 +900,7 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
   r->ep = api_endpoint_count();
   snprintf(r->method, sizeof r->method, "%s", method);
   snprintf(r->path, sizeof r->path, "%s", url);
+  request_id(d, c, r);
   client_of(d, c, r);
   srv_metrics_in_flight(d->metrics, +1);
   const char *bad = smuggling(c);
@@ -918,12 +1012,64 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
     return too_large(d, c, r);
   if (!r->is_post) {
     api_response ar;
+    if (!strcmp(api_endpoint_at(r->ep)->label, "openapi")) {
+      /* the contract changes only with the binary: a validator and a
+       * lifetime, and 304 to a client that has it */
+      r->etag = d->spec_etag;
+      const char *inm =
+          MHD_lookup_connection_value(c, MHD_HEADER_KIND, "If-None-Match");
+      if (inm && (strstr(inm, d->spec_etag) || !strcmp(inm, "*")))
+        return send_body(c, r, 304, NULL, 0, "application/json", 0, NULL, 0);
+    }
     handle(d, r, &ar);
     return send_api(c, r, &ar, NULL);
   }
   if (api_endpoint_at(r->ep)->run_class == API_RUN_BATCH)
     return batch_start(d, c, r);
   return submit(d, c, r);
+}
+
+/* A JSON string's contents (the path is the client's text). */
+static void json_text(FILE *f, const char *s) {
+  for (; *s; s++) {
+    unsigned char ch = (unsigned char)*s;
+    if (ch == '"' || ch == '\\')
+      fprintf(f, "\\%c", ch);
+    else if (ch < 0x20 || ch >= 0x7f)
+      fprintf(f, "\\u%04x", ch);
+    else
+      fputc(ch, f);
+  }
+}
+
+/* One line per request on stderr: JSON (default) or the plain
+ * "method path status us". */
+static void access_log(const struct srv_daemon *d, const req *r, int status,
+                       double dt) {
+  long us = (long)(dt * 1e6);
+  if (d->cfg.log_plain) {
+    fprintf(stderr, "%s %s %d %ld\n", r->method, r->path, status, us);
+    return;
+  }
+  struct timespec ts;
+  struct tm tm;
+  char when[32];
+  clock_gettime(CLOCK_REALTIME, &ts);
+  gmtime_r(&ts.tv_sec, &tm);
+  strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%S", &tm);
+  flockfile(stderr);
+  fprintf(stderr, "{\"time\":\"%s.%03ldZ\",\"request_id\":\"", when,
+          ts.tv_nsec / 1000000);
+  json_text(stderr, r->rid);
+  fprintf(stderr, "\",\"client\":\"");
+  json_text(stderr, r->key);
+  fprintf(stderr, "\",\"method\":\"");
+  json_text(stderr, r->method);
+  fprintf(stderr, "\",\"path\":\"");
+  json_text(stderr, r->path);
+  fprintf(stderr, "\",\"status\":%d,\"bytes\":%zu,\"us\":%ld}\n", status,
+          r->bytes, us);
+  funlockfile(stderr);
 }
 
 static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
@@ -938,9 +1084,10 @@ static void completed(void *cls, struct MHD_Connection *c, void **con_cls,
   int status = r->done ? r->status : 499; /* 499: client went away */
   srv_metrics_observe(d->metrics, r->ep, status, dt);
   srv_metrics_in_flight(d->metrics, -1);
+  if (r->batch)
+    r->bytes = r->batch->sent;
   if (!d->cfg.quiet)
-    fprintf(stderr, "%s %s %d %ld\n", r->method, r->path, status,
-            (long)(dt * 1e6));
+    access_log(d, r, status, dt);
   if (r->cn) {
     /* the next request on this connection has its own deadline */
     pthread_mutex_lock(&d->mu);
@@ -1116,11 +1263,20 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     d->cfg.batch_parallel = d->cfg.workers ? d->cfg.workers : 1;
   d->started = now();
   snprintf(d->transport, sizeof d->transport, "%s", MHD_get_version());
+  if (getentropy(&d->rid_seed, sizeof d->rid_seed) != 0)
+    d->rid_seed = (unsigned long long)time(NULL) * 0x9e3779b97f4a7c15ULL ^
+                  (unsigned long long)getpid();
+  /* the contract's validator: FNV-1a of its text */
+  unsigned long long h = 0xcbf29ce484222325ULL;
+  for (const char *p = api_openapi_json(); *p; p++)
+    h = (h ^ (unsigned char)*p) * 0x100000001b3ULL;
+  snprintf(d->spec_etag, sizeof d->spec_etag, "\"%016llx\"", h);
   srv_pool_cfg pc = {cfg->workers, cfg->client_workers, cfg->client_queue};
   if (!(d->metrics = srv_metrics_new()) || !(d->pool = srv_pool_new(&pc))) {
     daemon_free(d);
     return NULL;
   }
+  srv_metrics_build(d->metrics, api_version(), d->transport);
   if (listen_address(cfg, &ss, &flags)) {
     fprintf(stderr, "stickslipd: --bind %s is not an IPv4 or IPv6 address\n",
             cfg->bind);

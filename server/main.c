@@ -133,9 +133,17 @@ static void usage(FILE *f, const srv_config *defaults) {
       "  --trusted-proxy ADDR      a proxy whose X-Forwarded-For names the\n"
       "                            client (repeatable, up to %d)\n",
       SRV_MAX_PROXIES);
-  fprintf(f, "  --quiet                   no access log\n"
-             "  --version                 print the version and exit\n"
-             "  --help                    this text\n");
+  fprintf(f,
+          "  --log-format json|plain   the access log's lines: JSON (time,\n"
+          "                            request_id, client, method, path,\n"
+          "                            status, bytes, us) or plain (json)\n"
+          "  --quiet                   no access log\n"
+          "  --version                 print the version and exit\n"
+          "  --help                    this text\n\n"
+          "Every option can also be set in the environment as STICKSLIP_ and\n"
+          "its name in capitals with underscores (STICKSLIP_MAX_SECONDS=30,\n"
+          "STICKSLIP_QUIET=1, STICKSLIP_TRUSTED_PROXY=ADDR[,ADDR...]); the\n"
+          "command line wins.\n");
 }
 
 /* The value of flag @a f from the text @a s: a number within its range,
@@ -174,18 +182,88 @@ static void defaults(srv_config *cfg) {
   cfg->drain = 15;
 }
 
+/* The environment variable of option @a name ("--max-seconds" ->
+ * "STICKSLIP_MAX_SECONDS") into @a out. */
+static void env_name(const char *name, char *out, size_t n) {
+  size_t k = (size_t)snprintf(out, n, "STICKSLIP_");
+  for (const char *c = name + 2; *c && k + 1 < n; c++)
+    out[k++] = *c == '-' ? '_' : (char)(*c >= 'a' && *c <= 'z' ? *c - 32 : *c);
+  out[k] = 0;
+}
+
+static int set_log_format(srv_config *cfg, const char *v) {
+  if (v && !strcmp(v, "json"))
+    cfg->log_plain = 0;
+  else if (v && !strcmp(v, "plain"))
+    cfg->log_plain = 1;
+  else {
+    fprintf(stderr, "stickslipd: --log-format is json or plain\n");
+    return -1;
+  }
+  return 0;
+}
+
+static int add_proxy(srv_config *cfg, const char *v) {
+  if (cfg->n_trusted == SRV_MAX_PROXIES) {
+    fprintf(stderr, "stickslipd: at most %d --trusted-proxy\n",
+            SRV_MAX_PROXIES);
+    return -1;
+  }
+  /* kept as the peer's address is written, so that they compare */
+  if (!v || srv_address_text(v, cfg->trusted[cfg->n_trusted],
+                             sizeof cfg->trusted[0])) {
+    fprintf(stderr, "stickslipd: --trusted-proxy needs an IPv4 or IPv6 "
+                    "address\n");
+    return -1;
+  }
+  cfg->n_trusted++;
+  return 0;
+}
+
+/* Every option from the environment (STICKSLIP_...), before the flags. */
+static int from_environment(srv_config *cfg) {
+  char name[64];
+  const char *env;
+  double x;
+  for (size_t k = 0; k < N_FLAGS; k++) {
+    env_name(FLAGS[k].name, name, sizeof name);
+    if ((env = getenv(name)) && *env) {
+      if (parse(&FLAGS[k], env, &x)) {
+        fprintf(stderr, "stickslipd: (from %s)\n", name);
+        return -1;
+      }
+      set_value(cfg, &FLAGS[k], x);
+    }
+  }
+  if ((env = getenv("STICKSLIP_BIND")) && *env) {
+    if (strlen(env) >= sizeof cfg->bind) {
+      fprintf(stderr, "stickslipd: STICKSLIP_BIND is too long\n");
+      return -1;
+    }
+    snprintf(cfg->bind, sizeof cfg->bind, "%s", env);
+  }
+  if ((env = getenv("STICKSLIP_QUIET")) && *env)
+    cfg->quiet = strcmp(env, "0") != 0;
+  if ((env = getenv("STICKSLIP_LOG_FORMAT")) && *env &&
+      set_log_format(cfg, env))
+    return -1;
+  if ((env = getenv("STICKSLIP_TRUSTED_PROXY")) && *env) {
+    char list[1024];
+    snprintf(list, sizeof list, "%s", env);
+    for (char *save = NULL, *a = strtok_r(list, ",", &save); a;
+         a = strtok_r(NULL, ",", &save))
+      if (add_proxy(cfg, a))
+        return -1;
+  }
+  return 0;
+}
+
 /* The environment, then the flags.  Returns -1 to exit 0 (--help,
  * --version), 2 on a bad flag, 0 to run. */
 static int configure(srv_config *cfg, int argc, char **argv) {
-  const char *env;
   double x;
-  if ((env = getenv("STICKSLIP_BIND")) && *env)
-    snprintf(cfg->bind, sizeof cfg->bind, "%s", env);
-  if ((env = getenv("STICKSLIP_PORT")) && *env) {
-    if (parse(&FLAGS[0], env, &x))
-      return 2;
-    cfg->port = (int)x;
-  }
+  if (from_environment(cfg))
+    return 2;
   for (int i = 1; i < argc; i++) {
     const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
     const flag *f = NULL;
@@ -214,19 +292,12 @@ static int configure(srv_config *cfg, int argc, char **argv) {
       fprintf(stderr, "stickslipd: --bind needs an address\n");
       return 2;
     } else if (!strcmp(a, "--trusted-proxy")) {
-      if (cfg->n_trusted == SRV_MAX_PROXIES) {
-        fprintf(stderr, "stickslipd: at most %d --trusted-proxy\n",
-                SRV_MAX_PROXIES);
+      if (add_proxy(cfg, v))
         return 2;
-      }
-      /* kept as the peer's address is written, so that they compare */
-      if (!v || srv_address_text(v, cfg->trusted[cfg->n_trusted],
-                                 sizeof cfg->trusted[0])) {
-        fprintf(stderr, "stickslipd: --trusted-proxy needs an IPv4 or IPv6 "
-                        "address\n");
+      i++;
+    } else if (!strcmp(a, "--log-format")) {
+      if (set_log_format(cfg, v))
         return 2;
-      }
-      cfg->n_trusted++;
       i++;
     } else {
       fprintf(stderr, "stickslipd: unknown option %s (see --help)\n", a);

@@ -1,12 +1,19 @@
 /*
  * metrics.c: counters and latency histograms in the Prometheus text format.
- * The endpoint labels are the api's endpoint table.
+ * The endpoint labels are the api's endpoint table; requests are counted by
+ * their exact status; the process metrics are those Prometheus's client
+ * libraries export (CPU, memory, descriptors, start time).
  */
+#define _GNU_SOURCE
+#include <dirent.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "server.h"
 
@@ -14,9 +21,11 @@ static const double BOUNDS[SRV_BUCKETS] = {0.0001, 0.00025, 0.0005, 0.001,
                                            0.0025, 0.005,   0.01,   0.025,
                                            0.05,   0.1,     1.0,    10.0};
 
+#define N_STATUS 500 /* statuses 100..599, by status - 100 */
+
 typedef struct ep_metrics {
-  atomic_ulong status_class[6]; /* 1xx..5xx by index 1..5 */
-  atomic_ulong latency_us_sum;
+  atomic_ulong status[N_STATUS];
+  atomic_ulong latency_ns_sum;
   atomic_ulong latency_bucket[SRV_BUCKETS + 1];
 } ep_metrics;
 
@@ -26,6 +35,8 @@ struct srv_metrics {
   atomic_long in_flight;
   atomic_ulong rejected_busy, cancelled, slow, rejected_memory;
   atomic_long held, held_peak;
+  double start_time; /* since the epoch */
+  char build[160];   /* the labels of stickslip_build_info */
 };
 
 srv_metrics *srv_metrics_new(void) {
@@ -37,7 +48,16 @@ srv_metrics *srv_metrics_new(void) {
     free(m);
     return NULL;
   }
+  struct timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  m->start_time = (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
   return m;
+}
+
+void srv_metrics_build(srv_metrics *m, const char *version,
+                       const char *transport) {
+  snprintf(m->build, sizeof m->build, "version=\"%.40s\",transport=\"%.60s\"",
+           version, transport ? transport : "");
 }
 
 void srv_metrics_free(srv_metrics *m) {
@@ -52,14 +72,13 @@ static const char *label(const srv_metrics *m, size_t i) {
 
 void srv_metrics_observe(srv_metrics *m, size_t ep, int status,
                          double seconds) {
-  int cls = status / 100;
   if (ep >= m->n - 1)
     ep = m->n - 1;
-  if (cls < 1 || cls > 5)
-    cls = 5;
+  if (status < 100 || status > 599)
+    status = 500;
   ep_metrics *e = &m->ep[ep];
-  atomic_fetch_add(&e->status_class[cls], 1);
-  atomic_fetch_add(&e->latency_us_sum, (unsigned long)(seconds * 1e6));
+  atomic_fetch_add(&e->status[status - 100], 1);
+  atomic_fetch_add(&e->latency_ns_sum, (unsigned long)(seconds * 1e9));
   int b = 0;
   while (b < SRV_BUCKETS && seconds > BOUNDS[b])
     b++;
@@ -142,26 +161,88 @@ static void histogram(sbuf *s, const char *name, ep_metrics *e) {
       "stickslip_request_duration_seconds_bucket{endpoint=\"%s\",le=\"+Inf\"}"
       " %lu\n",
       name, cum);
-  put(s, "stickslip_request_duration_seconds_sum{endpoint=\"%s\"} %.6f\n", name,
-      1e-6 * (double)atomic_load(&e->latency_us_sum));
+  put(s, "stickslip_request_duration_seconds_sum{endpoint=\"%s\"} %.9f\n", name,
+      1e-9 * (double)atomic_load(&e->latency_ns_sum));
   put(s, "stickslip_request_duration_seconds_count{endpoint=\"%s\"} %lu\n",
       name, cum);
 }
 
+/* The process metrics of the Prometheus conventions, from getrusage and
+ * /proc (absent where /proc is). */
+static void process(sbuf *s, const srv_metrics *m) {
+  struct rusage ru;
+  struct rlimit rl;
+  if (getrusage(RUSAGE_SELF, &ru) == 0)
+    put(s,
+        "# HELP process_cpu_seconds_total Total user and system CPU time "
+        "spent in seconds.\n# TYPE process_cpu_seconds_total counter\n"
+        "process_cpu_seconds_total %.6f\n",
+        (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
+            (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec);
+  FILE *f = fopen("/proc/self/statm", "r");
+  unsigned long pages_v, pages_r;
+  if (f && fscanf(f, "%lu %lu", &pages_v, &pages_r) == 2) {
+    double page = (double)sysconf(_SC_PAGESIZE);
+    put(s,
+        "# HELP process_virtual_memory_bytes Virtual memory size in bytes.\n"
+        "# TYPE process_virtual_memory_bytes gauge\n"
+        "process_virtual_memory_bytes %.0f\n"
+        "# HELP process_resident_memory_bytes Resident memory size in "
+        "bytes.\n# TYPE process_resident_memory_bytes gauge\n"
+        "process_resident_memory_bytes %.0f\n",
+        (double)pages_v * page, (double)pages_r * page);
+  }
+  if (f)
+    fclose(f);
+  DIR *dir = opendir("/proc/self/fd");
+  if (dir) {
+    long n = 0;
+    struct dirent *de;
+    while ((de = readdir(dir)))
+      n += de->d_name[0] != '.';
+    closedir(dir);
+    put(s,
+        "# HELP process_open_fds Number of open file descriptors.\n"
+        "# TYPE process_open_fds gauge\nprocess_open_fds %ld\n",
+        n - 1); /* the directory's own */
+  }
+  if (getrlimit(RLIMIT_NOFILE, &rl) == 0)
+    put(s,
+        "# HELP process_max_fds Maximum number of open file descriptors.\n"
+        "# TYPE process_max_fds gauge\nprocess_max_fds %.0f\n",
+        rl.rlim_cur == RLIM_INFINITY ? -1.0 : (double)rl.rlim_cur);
+  put(s,
+      "# HELP process_start_time_seconds Start time of the process since "
+      "unix epoch in seconds.\n# TYPE process_start_time_seconds gauge\n"
+      "process_start_time_seconds %.3f\n",
+      m->start_time);
+}
+
 char *srv_metrics_render(srv_metrics *m) {
   sbuf s = {malloc(8192), 0, 8192};
+  put(&s,
+      "# HELP stickslip_build_info The version that runs, and its HTTP "
+      "library.\n# TYPE stickslip_build_info gauge\n"
+      "stickslip_build_info{%s} 1\n",
+      m->build);
   put(&s, "# HELP stickslip_requests_total Requests by endpoint and status "
-          "class.\n# TYPE stickslip_requests_total counter\n");
+          "(those seen; 499: the client went away).\n"
+          "# TYPE stickslip_requests_total counter\n");
   for (size_t e = 0; e < m->n; e++)
-    for (int c = 1; c <= 5; c++)
-      put(&s, "stickslip_requests_total{endpoint=\"%s\",code=\"%dxx\"} %lu\n",
-          label(m, e), c, atomic_load(&m->ep[e].status_class[c]));
+    for (int c = 0; c < N_STATUS; c++) {
+      unsigned long k = atomic_load(&m->ep[e].status[c]);
+      if (k)
+        put(&s, "stickslip_requests_total{endpoint=\"%s\",code=\"%d\"} %lu\n",
+            label(m, e), c + 100, k);
+    }
   put(&s, "# HELP stickslip_errors_total Requests answered 4xx or 5xx.\n"
           "# TYPE stickslip_errors_total counter\n");
-  for (size_t e = 0; e < m->n; e++)
-    put(&s, "stickslip_errors_total{endpoint=\"%s\"} %lu\n", label(m, e),
-        atomic_load(&m->ep[e].status_class[4]) +
-            atomic_load(&m->ep[e].status_class[5]));
+  for (size_t e = 0; e < m->n; e++) {
+    unsigned long k = 0;
+    for (int c = 300; c < N_STATUS; c++)
+      k += atomic_load(&m->ep[e].status[c]);
+    put(&s, "stickslip_errors_total{endpoint=\"%s\"} %lu\n", label(m, e), k);
+  }
   put(&s, "# HELP stickslip_request_duration_seconds Latency from the first "
           "byte of the request to the last byte of the response.\n"
           "# TYPE stickslip_request_duration_seconds histogram\n");
@@ -202,5 +283,6 @@ char *srv_metrics_render(srv_metrics *m) {
       "stickslip_rejected_memory_total %lu\n",
       atomic_load(&m->held), atomic_load(&m->held_peak),
       atomic_load(&m->rejected_memory));
+  process(&s, m);
   return s.p;
 }

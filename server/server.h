@@ -29,6 +29,7 @@ typedef struct srv_config {
   unsigned batch_parallel; /**< --batch-parallel: items of a batch in
                                 flight at once (workers) */
   int quiet;               /**< --quiet: no access log */
+  int log_plain;           /**< --log-format plain (default json) */
   /** --trusted-proxy (repeatable): peers whose X-Forwarded-For names the
    *  client, for the per-client queues */
   char trusted[SRV_MAX_PROXIES][48];
@@ -38,6 +39,7 @@ typedef struct srv_config {
 /* ---- the compute pool (pool.c) ----------------------------------------- */
 
 #define SRV_CLIENT_KEY 64 /* a client's key: its address as text */
+#define SRV_REQUEST_ID 64 /* the longest X-Request-Id taken from a client */
 
 enum {
   SRV_JOB_WAITING = 1,
@@ -108,6 +110,9 @@ typedef struct srv_metrics srv_metrics;
 
 srv_metrics *srv_metrics_new(void); /* NULL when out of memory */
 void srv_metrics_free(srv_metrics *m);
+/* The labels of stickslip_build_info. */
+void srv_metrics_build(srv_metrics *m, const char *version,
+                       const char *transport);
 /* @a ep: an endpoint index, or anything out of range for "other". */
 void srv_metrics_observe(srv_metrics *m, size_t ep, int status, double seconds);
 void srv_metrics_busy(srv_metrics *m);      /* a 503 for a full queue */
