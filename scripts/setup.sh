@@ -2,7 +2,8 @@
 # Install what stickslip needs to build, from Debian's packages (Debian 12).
 # As root it installs what is missing; otherwise it says what to install.
 set -euo pipefail
-pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-dev)
+pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-dev
+  zlib1g-dev)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

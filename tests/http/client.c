@@ -81,9 +81,10 @@ int http_send(int port, const char *req, size_t len) {
   return fd;
 }
 
-/* Decode a chunked body in place (it only shrinks); -1 when malformed. */
-static int dechunk(char *body) {
-  char *in = body, *out = body;
+/* Decode a chunked body of @a avail bytes in place (it only shrinks), binary
+ * safe; its length into *len; -1 when malformed. */
+static int dechunk(char *body, size_t avail, size_t *len) {
+  char *in = body, *out = body, *stop = body + avail;
   for (;;) {
     char *end;
     unsigned long n = strtoul(in, &end, 16);
@@ -92,13 +93,14 @@ static int dechunk(char *body) {
     in = end + 2;
     if (n == 0)
       break;
-    if (strlen(in) < n + 2)
+    if ((size_t)(stop - in) < n + 2)
       return -1;
     memmove(out, in, n);
     out += n;
     in += n + 2;
   }
   *out = 0;
+  *len = (size_t)(out - body);
   return 0;
 }
 
@@ -129,6 +131,7 @@ int http_read(int fd, int timeout_ms, http_resp *r) {
   r->status = atoi(buf + 9);
   char *b = strstr(buf, "\r\n\r\n");
   r->body = b ? b + 4 : buf + n;
+  r->len = (size_t)(buf + n - r->body);
   header(buf, "Content-Type", r->ctype, sizeof r->ctype);
   header(buf, "Retry-After", r->retry_after, sizeof r->retry_after);
   header(buf, "Allow", r->allow, sizeof r->allow);
@@ -136,7 +139,7 @@ int http_read(int fd, int timeout_ms, http_resp *r) {
   header(buf, "Transfer-Encoding", te, sizeof te);
   if (strcmp(te, "chunked") == 0) {
     r->chunked = 1;
-    if (dechunk(r->body))
+    if (dechunk(r->body, r->len, &r->len))
       return -2;
   }
   return 0;

@@ -13,6 +13,7 @@ typedef struct http_resp {
   int status;
   char *raw;  /* whole response, NUL-terminated */
   char *body; /* into raw */
+  size_t len; /* of body (which may hold NULs: a gzipped answer) */
   char ctype[96];
   char retry_after[16];
   char allow[32];
