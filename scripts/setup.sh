@@ -1,18 +1,34 @@
 #!/usr/bin/env bash
 # Install what stickslip needs to build, from Debian's packages (Debian 12).
 # As root it installs what is missing; otherwise it says what to install.
+#   setup.sh          what building and running need
+#   setup.sh --test   also the tools some tests use: promtool (prometheus),
+#                     to check /metrics; without them those checks are
+#                     skipped, so as another user their absence is only said
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-dev
   zlib1g-dev)
+extras=()
+if [ "${1:-}" = --test ]; then
+  extras=(prometheus)
+fi
 missing=()
-for p in "${pkgs[@]}"; do
+for p in "${pkgs[@]}" "${extras[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 if [ ${#missing[@]} -eq 0 ]; then
   exit 0
 fi
 if [ "$(id -u)" -ne 0 ]; then
-  echo "stickslip needs: ${missing[*]}" >&2
+  needed=()
+  for p in "${missing[@]}"; do
+    case " ${extras[*]} " in *" $p "*) ;; *) needed+=("$p") ;; esac
+  done
+  if [ ${#needed[@]} -eq 0 ]; then
+    echo "the tests that use ${missing[*]} will be skipped" >&2
+    exit 0
+  fi
+  echo "stickslip needs: ${needed[*]}" >&2
   echo "run this script as root (or: sudo apt-get install -y ${missing[*]})" >&2
   exit 1
 fi

@@ -5,7 +5,7 @@
 # built as a shared library.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --test
 jobs=$(nproc)
 for variant in release sanitize; do
   dir=build-test-$variant

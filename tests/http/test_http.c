@@ -1897,6 +1897,57 @@ static void test_environment(void) {
   unlink(d.log_path);
 }
 
+/* EVIDENCE: README "Operations": /metrics passes `promtool check metrics`
+ * (Prometheus's own linter) after requests of every kind of status; skipped
+ * where promtool is not installed (scripts/setup.sh --test installs it). */
+static void test_promtool(void) {
+  if (system("command -v promtool >/dev/null 2>&1") != 0) {
+    printf("promtool: not installed, skipped\n");
+    return;
+  }
+  daemon_proc d;
+  ASSERT_EQ_INT(daemon_start(BIN, NULL, &d), 0);
+  http_resp r;
+  const char *const reqs[][3] = {
+      {"GET", "/health", NULL},
+      {"GET", "/nowhere", NULL},
+      {"POST", "/orbit", "{}"},
+      {"POST", "/orbit", "{"},
+      {"GET", "/orbit", NULL},
+      {"POST", "/stability",
+       "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,"
+       "\"ur\":0.6178,\"V\":1},\"phases\":[{\"mode\":"
+       "\"slip\",\"duration\":4.4975},{\"mode\":"
+       "\"overshoot\",\"duration\":2.7227},{\"mode\":"
+       "\"stick\",\"duration\":3.0513}]}"}};
+  for (size_t i = 0; i < sizeof reqs / sizeof reqs[0]; i++) {
+    ASSERT_EQ_INT(http_do(d.port, reqs[i][0], reqs[i][1],
+                          reqs[i][2] ? JSON : NULL, reqs[i][2], &r),
+                  0);
+    http_free(&r);
+  }
+  ASSERT_EQ_INT(http_do(d.port, "GET", "/metrics", NULL, NULL, &r), 0);
+  char path[] = "/tmp/stickslip_metrics_XXXXXX";
+  int fd = mkstemp(path);
+  ASSERT_TRUE(fd >= 0);
+  if (fd >= 0) {
+    ASSERT_TRUE(write(fd, r.body, r.len) == (ssize_t)r.len);
+    close(fd);
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "promtool check metrics < %s", path);
+    int rc = system(cmd);
+    ASSERT_EQ_INT(rc, 0);
+    printf("promtool check metrics: %s\n", rc == 0 ? "clean" : "FAILED");
+    unlink(path);
+  }
+  ASSERT_TRUE(strstr(r.body, "code=\"404\"") &&
+              strstr(r.body, "code=\"405\"") &&
+              strstr(r.body, "code=\"422\"") && strstr(r.body, "code=\"400\""));
+  http_free(&r);
+  ASSERT_EQ_INT(daemon_stop(&d), 0);
+  unlink(d.log_path);
+}
+
 /* The tests that start their own daemon, by name. */
 static const struct {
   const char *name;
@@ -1912,6 +1963,7 @@ static const struct {
     {"forwarded", test_forwarded},
     {"batch", test_batch},
     {"environment", test_environment},
+    {"promtool", test_promtool},
 };
 
 /* Usage: test_http PATH/stickslipd [NAME]: every test, or the one test
