@@ -1,0 +1,238 @@
+#!/usr/bin/env python3
+"""The README's and the contract's examples, against a live daemon.
+
+  python3 scripts/examples.py --check STICKSLIPD   (what CI runs)
+  python3 scripts/examples.py --write STICKSLIPD   (regenerate them)
+
+Starts STICKSLIPD on a free port, then
+  - README.md: every ```sh block that is a curl command followed (before the
+    next ```sh block) by a fenced output block: the command is run against
+    the daemon and its answer compared with the block (JSON or NDJSON,
+    numbers to a relative 1e-9, the keys that change from run to run left
+    out: seconds, uptime_seconds, a request_id the request did not set);
+  - api/openapi.yaml: every request example of a POST is sent, and the
+    response example of the same name compared the same way.
+--check fails (exit 1) on the first difference and says where; --write
+puts the daemon's answers in place (the README's as the daemon prints them,
+the contract's as JSON values or NDJSON text).  Standard library only.
+"""
+import json
+import os
+import re
+import shlex
+import subprocess
+import sys
+import urllib.error
+import urllib.request
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+README = os.path.join(ROOT, "README.md")
+SPEC = os.path.join(ROOT, "api", "openapi.yaml")
+VOLATILE = {"seconds", "uptime_seconds", "in_flight"}
+
+
+def start(binary):
+    p = subprocess.Popen([binary, "--port", "0", "--quiet"],
+                         stderr=subprocess.PIPE, text=True)
+    line = p.stderr.readline()
+    m = re.search(r"http://[^ \n]+", line)
+    if not m:
+        p.kill()
+        sys.exit("examples: the daemon did not start: " + line)
+    return p, m.group(0).rstrip("/")
+
+
+def request(base, method, path, body=None, headers=None):
+    h = dict(headers or {})
+    data = body.encode() if body is not None else None
+    req = urllib.request.Request(base + path, data=data, method=method,
+                                 headers=h)
+    try:
+        with urllib.request.urlopen(req, timeout=120) as r:
+            return r.status, r.read().decode()
+    except urllib.error.HTTPError as e:
+        return e.code, e.read().decode()
+
+
+def curl(base, command):
+    """Run a README curl command (-s, -H, -d, -X, a URL) with urllib."""
+    args = shlex.split(command.replace("\\\n", " "))
+    if not args or args[0] != "curl":
+        return None
+    method, body, headers, url = None, None, {}, None
+    i = 1
+    while i < len(args):
+        a = args[i]
+        if a in ("-s", "-S", "-sS", "--silent"):
+            pass
+        elif a in ("-H", "--header"):
+            k, v = args[i + 1].split(":", 1)
+            headers[k.strip()] = v.strip()
+            i += 1
+        elif a in ("-d", "--data", "--data-binary"):
+            body = args[i + 1]
+            i += 1
+        elif a in ("-X", "--request"):
+            method = args[i + 1]
+            i += 1
+        elif a.startswith("http"):
+            url = a
+        else:
+            raise ValueError("examples: a curl option it does not know: " + a)
+        i += 1
+    path = re.sub(r"^https?://[^/]+", "", url)
+    return request(base, method or ("POST" if body is not None else "GET"),
+                   path, body, headers)[1]
+
+
+def normal(text, keep_id):
+    """JSON or NDJSON text as a comparable value."""
+    def clean(v):
+        if isinstance(v, dict):
+            return {k: clean(x) for k, x in v.items()
+                    if k not in VOLATILE and (keep_id or k != "request_id")}
+        if isinstance(v, list):
+            return [clean(x) for x in v]
+        return v
+    text = text.strip()
+    try:
+        return clean(json.loads(text))
+    except ValueError:
+        lines = [clean(json.loads(l)) for l in text.splitlines() if l.strip()]
+        # a batch's items come in the order they are done
+        return sorted(lines, key=lambda l: (0, l["index"]) if isinstance(
+            l.get("index"), int) else (1, 0))
+
+
+def same(a, b, where="", rtol=1e-9):
+    if a == "@SS_VERSION@" and isinstance(b, str):
+        return None  # the contract's source leaves the version to the build
+    if isinstance(a, bool) or isinstance(b, bool):
+        return None if a == b else where + ": %r != %r" % (a, b)
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        if abs(a - b) <= rtol * max(1.0, abs(a), abs(b)):
+            return None
+        return where + ": %r != %r" % (a, b)
+    if type(a) != type(b):
+        return where + ": types differ"
+    if isinstance(a, dict):
+        if set(a) != set(b):
+            return where + ": keys differ: %s" % sorted(set(a) ^ set(b))
+        for k in a:
+            d = same(a[k], b[k], where + "/" + k, rtol)
+            if d:
+                return d
+        return None
+    if isinstance(a, list):
+        if len(a) != len(b):
+            return where + ": lengths %d != %d" % (len(a), len(b))
+        for i, (x, y) in enumerate(zip(a, b)):
+            d = same(x, y, "%s/%d" % (where, i), rtol)
+            if d:
+                return d
+        return None
+    return None if a == b else where + ": %r != %r" % (a, b)
+
+
+FENCE = re.compile(r"^```([a-z]*)\n(.*?)^```\n", re.S | re.M)
+
+
+def readme(base, write):
+    text = open(README).read()
+    blocks = list(FENCE.finditer(text))
+    out, last, checked = [], 0, 0
+    for i, b in enumerate(blocks):
+        if b.group(1) != "sh" or not b.group(2).lstrip().startswith("curl"):
+            continue
+        nxt = blocks[i + 1] if i + 1 < len(blocks) else None
+        if not nxt or nxt.group(1) not in ("json", ""):
+            continue
+        keep_id = "X-Request-Id" in b.group(2)
+        want = nxt.group(2)
+        try:
+            want_v = normal(want, keep_id)
+        except ValueError:
+            continue  # not an answer (a shell session, a sketch)
+        answer = curl(base, b.group(2).strip())
+        d = same(want_v, normal(answer, keep_id))
+        checked += 1
+        if d and not write:
+            line = text[:nxt.start()].count("\n") + 2
+            print("README.md:%d: the answer differs at %s" % (line, d))
+            return checked, False
+        if d and write:
+            out.append(text[last:nxt.start(2)])
+            out.append(answer.strip() + "\n")
+            last = nxt.end(2)
+    if write:
+        out.append(text[last:])
+        open(README, "w").write("".join(out))
+    return checked, True
+
+
+def spec(base, write):
+    doc = json.load(open(SPEC))
+    checked = 0
+    for path, item in doc["paths"].items():
+        post = item.get("post")
+        if not post:
+            continue
+        reqs = (post.get("requestBody", {}).get("content", {})
+                .get("application/json", {}).get("examples", {}))
+        for name, ex in reqs.items():
+            status, answer = request(base, "POST", path,
+                                     json.dumps(ex["value"]),
+                                     {"Content-Type": "application/json"})
+            found = None
+            for code, resp in post.get("responses", {}).items():
+                for media in resp.get("content", {}).values():
+                    if name in media.get("examples", {}):
+                        found = (code, media["examples"][name])
+            if not found:
+                print("openapi.yaml: %s %s has no response example" %
+                      (path, name))
+                return checked, False
+            code, rex = found
+            want = rex["value"]
+            got_v = normal(answer, False)
+            want_v = normal(want, False) if isinstance(want, str) else \
+                normal(json.dumps(want), False)
+            d = None if str(status) == code else "status %d != %s" % (status,
+                                                                     code)
+            d = d or same(want_v, got_v)
+            checked += 1
+            if d and not write:
+                print("openapi.yaml: %s example %s differs: %s" %
+                      (path, name, d))
+                return checked, False
+            if d and write:
+                version = json.loads(request(base, "GET", "/version")[1])[
+                    "version"]
+                answer = answer.replace('"version":"%s"' % version,
+                                        '"version":"@SS_VERSION@"')
+                rex["value"] = answer if isinstance(want, str) else \
+                    json.loads(answer)
+    if write:
+        open(SPEC, "w").write(json.dumps(doc, indent=2) + "\n")
+    return checked, True
+
+
+def main():
+    if len(sys.argv) != 3 or sys.argv[1] not in ("--check", "--write"):
+        sys.exit(__doc__)
+    write = sys.argv[1] == "--write"
+    proc, base = start(sys.argv[2])
+    try:
+        n1, ok1 = readme(base, write)
+        n2, ok2 = spec(base, write) if ok1 else (0, False)
+    finally:
+        proc.terminate()
+        proc.wait()
+    print("examples: %d in README.md, %d in api/openapi.yaml %s" %
+          (n1, n2, "written" if write else "checked" if ok1 and ok2
+           else "- differ"))
+    sys.exit(0 if ok1 and ok2 else 1)
+
+
+if __name__ == "__main__":
+    main()
