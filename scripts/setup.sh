@@ -2,15 +2,16 @@
 # Install what stickslip needs to build, from Debian's packages (Debian 12).
 # As root it installs what is missing; otherwise it says what to install.
 #   setup.sh          what building and running need
-#   setup.sh --test   also the tools some tests use: promtool (prometheus),
-#                     to check /metrics; without them those checks are
+#   setup.sh --test   also the tools some tests use: promtool (prometheus)
+#                     to check /metrics, nginx in front of replicas, python3
+#                     for the examples' check; without them those tests are
 #                     skipped, so as another user their absence is only said
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-dev
   zlib1g-dev)
 extras=()
 if [ "${1:-}" = --test ]; then
-  extras=(prometheus)
+  extras=(prometheus nginx python3)
 fi
 missing=()
 for p in "${pkgs[@]}" "${extras[@]}"; do
