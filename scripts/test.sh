@@ -15,8 +15,9 @@ for variant in release sanitize; do
     extra=(-DCMAKE_BUILD_TYPE=Debug "-DSTICKSLIP_SANITIZE=address;undefined")
     # the search battery's brute force and the existence map are slow under
     # the sanitizers: the optimised build runs all 40 sets and 50x50 cells,
-    # this one 2 sets of each half, 12x12 cells and an 8x8 map
-    sets=(SS_SEARCH_SETS=2 SS_EXISTENCE_N=12 SS_MAP_N=8)
+    # this one 2 sets of each half, 12x12 cells, an 8x8 map and 200000 of
+    # the million random doubles of the number writer's test
+    sets=(SS_SEARCH_SETS=2 SS_EXISTENCE_N=12 SS_MAP_N=8 SS_NUMBERS_COUNT=200000)
   else
     extra=(-DCMAKE_BUILD_TYPE=RelWithDebInfo)
   fi
