@@ -4,14 +4,15 @@
 #   setup.sh          what building and running need
 #   setup.sh --test   also the tools some tests use: promtool (prometheus)
 #                     to check /metrics, nginx in front of replicas, python3
-#                     for the examples' check; without them those tests are
+#                     and its jsonschema for the examples' and the contract's
+#                     checks; without them those tests are
 #                     skipped, so as another user their absence is only said
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-dev
   zlib1g-dev)
 extras=()
 if [ "${1:-}" = --test ]; then
-  extras=(prometheus nginx python3)
+  extras=(prometheus nginx python3 python3-jsonschema)
 fi
 missing=()
 for p in "${pkgs[@]}" "${extras[@]}"; do

@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""Every answer of a live daemon against the contract's schemas.
+
+  python3 scripts/validate.py PATH/stickslipd
+
+Starts the daemon on a free port and sends it every request the repository
+holds: each request example of api/openapi.yaml, each codec case of
+tests/api/cases (success and problem alike, to the endpoint its name
+starts with), and a GET of each GET endpoint, plus an unknown path and a
+wrong method.  Each answer's status must be one the contract lists for that
+path (or a problem status of its "default"), its Content-Type the one listed
+there, and its JSON body valid under the listed schema (JSON Schema 2020-12,
+as OpenAPI 3.1 uses, with the document's $refs), by the python3-jsonschema
+validator.  NDJSON answers are checked line by line as JSON.  Exit 0 when
+every answer is valid; 77 when jsonschema is not installed.
+"""
+import glob
+import json
+import os
+import re
+import subprocess
+import sys
+import urllib.error
+import urllib.request
+
+try:
+    import jsonschema
+except ImportError:
+    print("validate: python3-jsonschema is not installed, skipped")
+    sys.exit(77)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def start(binary):
+    p = subprocess.Popen([binary, "--port", "0", "--quiet"],
+                         stderr=subprocess.PIPE, text=True)
+    m = re.search(r"http://[^ \n]+", p.stderr.readline())
+    if not m:
+        p.kill()
+        sys.exit("validate: the daemon did not start")
+    return p, m.group(0).rstrip("/")
+
+
+def send(base, method, path, body=None):
+    data = body.encode() if body is not None else None
+    req = urllib.request.Request(base + path, data=data, method=method,
+                                 headers={"Content-Type": "application/json"}
+                                 if body is not None else {})
+    try:
+        with urllib.request.urlopen(req, timeout=120) as r:
+            return r.status, r.headers.get("Content-Type", ""), r.read().decode()
+    except urllib.error.HTTPError as e:
+        return e.code, e.headers.get("Content-Type", ""), e.read().decode()
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit(__doc__)
+    spec_text = open(os.path.join(ROOT, "api", "openapi.yaml")).read()
+    spec = json.loads(spec_text.replace("@SS_VERSION@", "0.0.0"))
+    # the document as the root of its own $refs
+    registry_root = spec
+    paths = spec["paths"]
+    requests = []  # (method, path, body)
+    for path, item in paths.items():
+        for method, op in item.items():
+            if method == "get":
+                requests.append(("GET", path, None))
+            if method == "post":
+                exs = (op.get("requestBody", {}).get("content", {})
+                       .get("application/json", {}).get("examples", {}))
+                for ex in exs.values():
+                    requests.append(("POST", path, json.dumps(ex["value"])))
+    labels = {p.strip("/").replace(".json", ""): p for p in paths}
+    for case in sorted(glob.glob(os.path.join(ROOT, "tests", "api", "cases",
+                                              "*", "request.json"))):
+        name = os.path.basename(os.path.dirname(case))
+        if os.path.exists(os.path.join(os.path.dirname(case), "limits.json")):
+            continue  # a case for other limits than the daemon's defaults
+        label = name.split("-")[0]
+        if label in labels:
+            requests.append(("POST", labels[label], open(case).read()))
+    requests += [("GET", "/nowhere", None), ("GET", "/orbit", None),
+                 ("POST", "/health", "{}")]
+    proc, base = start(sys.argv[1])
+    bad, checked = [], 0
+    try:
+        for method, path, body in requests:
+            status, ctype, text = send(base, method, path, body)
+            where = "%s %s -> %d" % (method, path, status)
+            op = paths.get(path, {}).get(method.lower())
+            if op is None:  # an unknown path or method: a problem
+                ok = status in (404, 405) and \
+                    ctype.startswith("application/problem+json")
+                schema = spec["components"]["schemas"]["Problem"]
+                if not ok:
+                    bad.append(where + ": expected a 404/405 problem")
+                    continue
+            else:
+                resp = op["responses"].get(str(status))
+                if resp is None:
+                    bad.append(where + ": status not in the contract")
+                    continue
+                media = ctype.split(";")[0].strip()
+                content = resp.get("content", {})
+                if media not in content:
+                    bad.append(where + ": %s not in the contract (%s)" %
+                               (media, ", ".join(content)))
+                    continue
+                schema = content[media].get("schema", {})
+            if not ("json" in ctype):
+                checked += 1  # text (the metrics): its media type is checked
+                continue
+            lines = [text] if "ndjson" not in ctype else \
+                [l for l in text.splitlines() if l.strip()]
+            for line in lines:
+                try:
+                    value = json.loads(line) if "ndjson" not in ctype or \
+                        schema.get("type") != "string" else line
+                    if "ndjson" in ctype:
+                        json.loads(line)  # each line is JSON
+                    full = dict(schema)
+                    full["components"] = spec["components"]
+                    jsonschema.validate(value, full,
+                                        cls=jsonschema.Draft202012Validator)
+                    checked += 1
+                except (ValueError, jsonschema.ValidationError) as e:
+                    msg = getattr(e, "message", str(e))
+                    path_in = "/".join(str(p) for p in getattr(e, "absolute_path", []))
+                    bad.append("%s: at /%s: %s" % (where, path_in, msg[:200]))
+    finally:
+        proc.terminate()
+        proc.wait()
+    for b in bad[:40]:
+        print(b)
+    print("validate: %d requests, %d answers valid, %d not" %
+          (len(requests), checked, len(bad)))
+    sys.exit(1 if bad else 0)
+
+
+if __name__ == "__main__":
+    main()
