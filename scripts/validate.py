@@ -11,7 +11,8 @@ wrong method.  Each answer's status must be one the contract lists for that
 path (or a problem status of its "default"), its Content-Type the one listed
 there, and its JSON body valid under the listed schema (JSON Schema 2020-12,
 as OpenAPI 3.1 uses, with the document's $refs), by the python3-jsonschema
-validator.  NDJSON answers are checked line by line as JSON.  Exit 0 when
+validator; every answer must carry X-Request-Id (a 405 Allow, a 503
+Retry-After).  NDJSON answers are checked line by line as JSON.  Exit 0 when
 every answer is valid; 77 when jsonschema is not installed.
 """
 import glob
@@ -49,9 +50,9 @@ def send(base, method, path, body=None):
                                  if body is not None else {})
     try:
         with urllib.request.urlopen(req, timeout=120) as r:
-            return r.status, r.headers.get("Content-Type", ""), r.read().decode()
+            return r.status, r.headers, r.read().decode()
     except urllib.error.HTTPError as e:
-        return e.code, e.headers.get("Content-Type", ""), e.read().decode()
+        return e.code, e.headers, e.read().decode()
 
 
 def main():
@@ -87,8 +88,16 @@ def main():
     bad, checked = [], 0
     try:
         for method, path, body in requests:
-            status, ctype, text = send(base, method, path, body)
+            status, headers, text = send(base, method, path, body)
+            ctype = headers.get("Content-Type", "")
             where = "%s %s -> %d" % (method, path, status)
+            # the headers every answer, or every such answer, carries
+            if not headers.get("X-Request-Id"):
+                bad.append(where + ": no X-Request-Id")
+            if status == 503 and not headers.get("Retry-After"):
+                bad.append(where + ": a 503 without Retry-After")
+            if status == 405 and not headers.get("Allow"):
+                bad.append(where + ": a 405 without Allow")
             op = paths.get(path, {}).get(method.lower())
             if op is None:  # an unknown path or method: a problem
                 ok = status in (404, 405) and \
