@@ -2,13 +2,17 @@
  * main.c: stickslipd's flags, environment and signals.
  */
 #define _GNU_SOURCE
+#include <arpa/inet.h>
 #include <errno.h>
+#include <netdb.h>
 #include <jansson.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
+#include <sys/time.h>
 #include <unistd.h>
 
 #include "server.h"
@@ -258,8 +262,52 @@ static int from_environment(srv_config *cfg) {
   return 0;
 }
 
+/* --health-check: GET /health of the daemon this configuration names (its
+ * port; its address, or the loopback when it listens on every address),
+ * within 3 s.  The exit status: 0 when it answers 200, 1 otherwise.  For a
+ * container's HEALTHCHECK, which then needs no HTTP client of its own. */
+static int health_check(const srv_config *cfg) {
+  char host[64], port[16];
+  const char *b = cfg->bind;
+  snprintf(host, sizeof host, "%s",
+           !strcmp(b, "0.0.0.0") ? "127.0.0.1"
+           : !strcmp(b, "::")    ? "::1"
+                                 : b);
+  snprintf(port, sizeof port, "%d", cfg->port);
+  struct addrinfo hints, *ai = NULL;
+  memset(&hints, 0, sizeof hints);
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_NUMERICHOST | AI_NUMERICSERV;
+  if (getaddrinfo(host, port, &hints, &ai) != 0 || !ai) {
+    fprintf(stderr, "stickslipd: --health-check: bad address %s\n", host);
+    return 1;
+  }
+  int fd = socket(ai->ai_family, SOCK_STREAM, 0), ok = 0;
+  struct timeval tv = {3, 0};
+  if (fd >= 0) {
+    setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
+  }
+  if (fd >= 0 && connect(fd, ai->ai_addr, ai->ai_addrlen) == 0) {
+    const char req[] = "GET /health HTTP/1.0\r\nHost: localhost\r\n\r\n";
+    char buf[64] = {0};
+    if (write(fd, req, sizeof req - 1) == (ssize_t)(sizeof req - 1) &&
+        read(fd, buf, sizeof buf - 1) >= 12)
+      ok = !strncmp(buf, "HTTP/1.", 7) && !strncmp(buf + 9, "200", 3);
+  }
+  if (fd >= 0)
+    close(fd);
+  freeaddrinfo(ai);
+  if (!ok)
+    fprintf(stderr, "stickslipd: --health-check: no 200 from %s:%s\n", host,
+            port);
+  return ok ? 0 : 1;
+}
+
 /* The environment, then the flags.  Returns -1 to exit 0 (--help,
  * --version), 2 on a bad flag, 0 to run. */
+static int check_health; /* --health-check: probe a daemon, do not run one */
+
 static int configure(srv_config *cfg, int argc, char **argv) {
   double x;
   if (from_environment(cfg))
@@ -285,6 +333,8 @@ static int configure(srv_config *cfg, int argc, char **argv) {
       return -1;
     } else if (!strcmp(a, "--quiet")) {
       cfg->quiet = 1;
+    } else if (!strcmp(a, "--health-check")) {
+      check_health = 1;
     } else if (!strcmp(a, "--bind") && v && strlen(v) < sizeof cfg->bind) {
       snprintf(cfg->bind, sizeof cfg->bind, "%s", v);
       i++;
@@ -313,6 +363,8 @@ int main(int argc, char **argv) {
   int rc = configure(&cfg, argc, argv);
   if (rc)
     return rc < 0 ? 0 : rc;
+  if (check_health)
+    return health_check(&cfg);
   if (cfg.client_workers == 0) /* another client always finds a worker */
     cfg.client_workers = cfg.workers > 1 ? cfg.workers - 1 : 1;
   if (cfg.lim.map_threads == 0)

@@ -1820,6 +1820,15 @@ static void test_operations(const daemon_proc *d) {
     if (!strstr(r.body, proc[i]))
       TEST_FAIL_("/metrics lacks %s", proc[i]);
   http_free(&r);
+  /* --health-check probes a daemon: 0 when it answers, 1 when none does */
+  char cmd[512];
+  snprintf(cmd, sizeof cmd, "%s --health-check --port %d 2>/dev/null", BIN,
+           PORT);
+  int hc = system(cmd);
+  ASSERT_TRUE(WIFEXITED(hc) && WEXITSTATUS(hc) == 0);
+  snprintf(cmd, sizeof cmd, "%s --health-check --port 1 2>/dev/null", BIN);
+  hc = system(cmd);
+  ASSERT_TRUE(WIFEXITED(hc) && WEXITSTATUS(hc) == 1);
   /* the access log: a JSON line per request, with its id and bytes */
   usleep(100000);
   char *log = daemon_log(d);
