@@ -590,6 +590,11 @@ typedef struct batch {
   long held;   /* bytes counted against the memory budget */
   double t0;
   size_t sent; /* bytes of the answer written */
+  /* gzip: each piece of lines deflated with a sync flush, so that the
+   * client can read each line as soon as it is written */
+  int gz, gz_finishing, gz_end;
+  z_stream zs;
+  char *gz_in;
 } batch;
 
 static void batch_hold(batch *b, long bytes) {
@@ -598,6 +603,9 @@ static void batch_hold(batch *b, long bytes) {
 }
 
 static void batch_free(batch *b) {
+  if (b->gz)
+    deflateEnd(&b->zs);
+  free(b->gz_in);
   while (b->ready) {
     bitem *it = b->ready;
     b->ready = it->next;
@@ -823,6 +831,48 @@ static ssize_t batch_read(void *cls, uint64_t pos, char *buf, size_t max) {
   return ret;
 }
 
+/* batch_read, gzipped: a piece of lines is deflated with Z_SYNC_FLUSH (its
+ * bytes complete for the client at once); output that does not fit is kept
+ * by zlib and given first on the next call. */
+static ssize_t batch_read_gz(batch *b, uint64_t pos, char *buf, size_t max) {
+  z_stream *zs = &b->zs;
+  unsigned pend = 0;
+  int bits = 0;
+  zs->next_out = (Bytef *)buf;
+  zs->avail_out = (uInt)max;
+  deflatePending(zs, &pend, &bits);
+  if (pend == 0 && !b->gz_finishing) {
+    size_t in_max = max / 2 < STREAM_CHUNK ? max / 2 : STREAM_CHUNK;
+    ssize_t n = batch_read(b, pos, b->gz_in, in_max > 0 ? in_max : 1);
+    if (n == MHD_CONTENT_READER_END_WITH_ERROR)
+      return n;
+    if (n == MHD_CONTENT_READER_END_OF_STREAM)
+      b->gz_finishing = 1;
+    else if (n == 0)
+      return 0; /* nothing ready: batch_read suspended the connection */
+    else {
+      zs->next_in = (Bytef *)b->gz_in;
+      zs->avail_in = (uInt)n;
+      b->sent -= (size_t)n; /* counted below as sent, compressed */
+    }
+  }
+  if (b->gz_end)
+    return MHD_CONTENT_READER_END_OF_STREAM;
+  int rc = deflate(zs, b->gz_finishing ? Z_FINISH : Z_SYNC_FLUSH);
+  if (rc == Z_STREAM_END)
+    b->gz_end = 1;
+  else if (rc != Z_OK && rc != Z_BUF_ERROR)
+    return MHD_CONTENT_READER_END_WITH_ERROR;
+  size_t got = max - zs->avail_out;
+  b->sent += got;
+  return got ? (ssize_t)got : MHD_CONTENT_READER_END_OF_STREAM;
+}
+
+static ssize_t batch_reader(void *cls, uint64_t pos, char *buf, size_t max) {
+  batch *b = cls;
+  return b->gz ? batch_read_gz(b, pos, buf, max) : batch_read(b, pos, buf, max);
+}
+
 /* The response is done with the batch. */
 static void batch_release(void *cls) {
   batch *b = cls;
@@ -873,6 +923,12 @@ static enum MHD_Result batch_start(struct srv_daemon *d,
   atomic_store(&b->fd, r->cn ? r->cn->fd : -1);
   b->refs = 1; /* the response */
   b->t0 = r->t0;
+  if (r->gzip && (b->gz_in = malloc(STREAM_CHUNK)) &&
+      deflateInit2(&b->zs, GZIP_LEVEL, Z_DEFLATED, 15 + 16, 8,
+                   Z_DEFAULT_STRATEGY) == Z_OK) {
+    b->gz = 1;
+    batch_hold(b, GZIP_STATE);
+  }
   batch_hold(b, (long)api_batch_held(ab));
   /* the items keep their own copies of their bodies */
   free(r->buf);
@@ -880,7 +936,7 @@ static enum MHD_Result batch_start(struct srv_daemon *d,
   hold(d, r, -(long)r->len);
   r->len = r->cap = 0;
   struct MHD_Response *resp = MHD_create_response_from_callback(
-      MHD_SIZE_UNKNOWN, STREAM_CHUNK, batch_read, b, batch_release);
+      MHD_SIZE_UNKNOWN, STREAM_CHUNK, batch_reader, b, batch_release);
   if (!resp) {
     batch_free(b);
     return MHD_NO;
@@ -888,6 +944,9 @@ static enum MHD_Result batch_start(struct srv_daemon *d,
   MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
                           "application/x-ndjson");
   MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+  MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Accept-Encoding");
+  if (b->gz)
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_ENCODING, "gzip");
   if (r->rid[0])
     MHD_add_response_header(resp, "X-Request-Id", r->rid);
   r->batch = b;

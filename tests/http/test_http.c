@@ -1731,6 +1731,35 @@ static void test_gzip(void) {
   free(text);
   http_free(&gz);
   http_free(&plain);
+  /* a batch: its NDJSON gzipped piece by piece, each flushed */
+  const char *bat =
+      "{\"requests\":[{\"id\":\"s\",\"path\":\"/simulate\",\"body\":"
+      "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,"
+      "\"V\":1},\"initial\":[1.27,4.36,-0.8,1],\"t_end\":50,\"samples\":"
+      "{\"n\":300}}},{\"id\":\"o\",\"path\":\"/orbit\",\"body\":{\"params\":"
+      "{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,\"V\":1},"
+      "\"guess\":{\"durations\":[4.4975,2.7227,3.0513]}}}]}";
+  ASSERT_EQ_INT(
+      raw_with(PORT, "POST", "/batch", "Accept-Encoding: gzip\r\n", bat, &gz),
+      0);
+  ASSERT_EQ_INT(gz.status, 200);
+  ASSERT_TRUE(header_of(gz.raw, "Content-Encoding", v, sizeof v) &&
+              !strcmp(v, "gzip"));
+  text = gunzip(gz.body, gz.len, &n);
+  ASSERT_TRUE(text != NULL);
+  int lines = 0, ok_lines = 0;
+  for (char *l = text ? strtok(text, "\n") : NULL; l; l = strtok(NULL, "\n")) {
+    json_t *j = json_loads(l, 0, NULL);
+    lines++;
+    ok_lines += j && (json_integer_value(json_object_get(j, "status")) == 200 ||
+                      json_is_true(json_object_get(j, "done")));
+    json_decref(j);
+  }
+  ASSERT_EQ_INT(lines, 3);
+  ASSERT_EQ_INT(ok_lines, 3);
+  printf("gzip: a /batch of 2 items, %zu -> %zu bytes\n", n, gz.len);
+  free(text);
+  http_free(&gz);
   /* refused (q=0), or too small to gain */
   const char *no[][2] = {{"/openapi.json", "Accept-Encoding: gzip;q=0\r\n"},
                          {"/openapi.json", "Accept-Encoding: xgzip\r\n"},
