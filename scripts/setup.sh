@@ -5,20 +5,32 @@
 #   setup.sh --test   also the tools some tests use: promtool (prometheus)
 #                     to check /metrics, nginx in front of replicas, python3
 #                     and its jsonschema for the examples' and the contract's
-#                     checks; without them those tests are
-#                     skipped, so as another user their absence is only said
+#                     checks, node and npm for the contract's linter (the
+#                     pinned @redocly/cli of api/lint, from the npm
+#                     registry); without them those tests are skipped, so
+#                     as another user their absence is only said
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-dev
   zlib1g-dev)
 extras=()
 if [ "${1:-}" = --test ]; then
   extras=(prometheus nginx python3 python3-jsonschema)
+  command -v npm >/dev/null || extras+=(nodejs npm)
 fi
+cd "$(dirname "$0")/.."
 missing=()
 for p in "${pkgs[@]}" "${extras[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# the contract's linter, at the version api/lint/package-lock.json pins
+lint_tools() {
+  if [ "${1:-}" = --test ] && command -v npm >/dev/null &&
+    [ ! -x api/lint/node_modules/.bin/redocly ]; then
+    (cd api/lint && npm ci --no-audit --no-fund --ignore-scripts --loglevel=error)
+  fi
+}
 if [ ${#missing[@]} -eq 0 ]; then
+  lint_tools "$@"
   exit 0
 fi
 if [ "$(id -u)" -ne 0 ]; then
@@ -37,3 +49,4 @@ fi
 export DEBIAN_FRONTEND=noninteractive
 apt-get update -q
 apt-get install -y -q --no-install-recommends "${missing[@]}"
+lint_tools "$@"
