@@ -3,18 +3,19 @@
 # As root it installs what is missing; otherwise it says what to install.
 #   setup.sh          what building and running need
 #   setup.sh --test   also the tools some tests use: promtool (prometheus)
-#                     to check /metrics, nginx in front of replicas, python3
-#                     and its jsonschema for the examples' and the contract's
-#                     checks, node and npm for the contract's linter (the
-#                     pinned @redocly/cli of api/lint, from the npm
-#                     registry); without them those tests are skipped, so
-#                     as another user their absence is only said
+#                     to check /metrics, systemd-analyze (systemd) to verify
+#                     the unit, nginx in front of replicas, python3 and its
+#                     jsonschema for the examples' and the contract's checks,
+#                     node and npm for the contract's linter (the pinned
+#                     @redocly/cli of api/lint, from the npm registry);
+#                     without them those tests are skipped, so as another
+#                     user their absence is only said
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-dev
   zlib1g-dev)
 extras=()
 if [ "${1:-}" = --test ]; then
-  extras=(prometheus nginx python3 python3-jsonschema)
+  extras=(prometheus nginx python3 python3-jsonschema systemd)
   command -v npm >/dev/null || extras+=(nodejs npm)
 fi
 cd "$(dirname "$0")/.."
