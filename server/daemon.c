@@ -91,7 +91,7 @@ struct srv_daemon {
   /* request ids: a per-start random seed mixed with a counter */
   unsigned long long rid_seed;
   atomic_ullong rid_next;
-  char spec_etag[24]; /* of GET /openapi.json */
+  char (*etags)[24]; /* per row: a static answer's validator, or "" */
 };
 
 enum { R_FRESH = 0, R_ANSWERED = 1 };
@@ -116,6 +116,8 @@ typedef struct req {
   size_t bytes;                 /* of the answer's body, as sent */
   char rid[SRV_REQUEST_ID + 1]; /* X-Request-Id, given or made */
   const char *etag;             /* a validator for a static answer, or NULL */
+  char cors[128];               /* Access-Control-Allow-Origin, or "" */
+  char preflight[24];           /* OPTIONS: the methods the path takes */
   int gzip;                     /* the client accepts gzip */
   char method[8];
   char path[96];
@@ -164,7 +166,7 @@ static int compressible(const char *ctype) {
   return ctype && (!strncmp(ctype, "application/json", 16) ||
                    !strncmp(ctype, "application/x-ndjson", 20) ||
                    !strncmp(ctype, "application/problem+json", 24) ||
-                   !strncmp(ctype, "text/plain", 10));
+                   !strncmp(ctype, "text/", 5));
 }
 
 /* @a body (len bytes) gzipped into a new buffer (*out, *out_len); -1 when
@@ -197,6 +199,50 @@ static int gzip_buffer(const char *body, size_t len, char **out,
   return 0;
 }
 
+/* The headers every answer carries: nosniff, the request id, and for a
+ * page of an allowed origin (--cors-origin) what its browser needs: the
+ * origin allowed, the headers it may read, and on a preflight the methods
+ * and request headers it may use, for 10 minutes. */
+static void common_headers(const req *r, struct MHD_Response *resp) {
+  MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
+  if (r->rid[0])
+    MHD_add_response_header(resp, "X-Request-Id", r->rid);
+  if (!r->d || !r->d->cfg.n_origins)
+    return;
+  MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Origin");
+  if (!r->cors[0])
+    return;
+  MHD_add_response_header(resp, "Access-Control-Allow-Origin", r->cors);
+  if (r->preflight[0]) {
+    MHD_add_response_header(resp, "Access-Control-Allow-Methods", r->preflight);
+    MHD_add_response_header(resp, "Access-Control-Allow-Headers",
+                            "Content-Type, X-Request-Id");
+    MHD_add_response_header(resp, "Access-Control-Max-Age", "600");
+  } else {
+    MHD_add_response_header(resp, "Access-Control-Expose-Headers",
+                            "X-Request-Id, Retry-After, ETag");
+  }
+}
+
+/* The origin of a browser's request, when --cors-origin allows it. */
+static void cors_of(const struct srv_daemon *d, struct MHD_Connection *c,
+                    req *r) {
+  const char *o = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Origin");
+  r->cors[0] = 0;
+  if (!o || !d->cfg.n_origins)
+    return;
+  for (int i = 0; i < d->cfg.n_origins; i++) {
+    if (!strcmp(d->cfg.origins[i], "*")) {
+      snprintf(r->cors, sizeof r->cors, "*");
+      return;
+    }
+    if (!strcasecmp(d->cfg.origins[i], o)) {
+      snprintf(r->cors, sizeof r->cors, "%s", d->cfg.origins[i]);
+      return;
+    }
+  }
+}
+
 static enum MHD_Result send_body(struct MHD_Connection *c, req *r, int status,
                                  char *body, size_t len, const char *ctype,
                                  int retry_after, const char *allow,
@@ -220,14 +266,20 @@ static enum MHD_Result send_body(struct MHD_Connection *c, req *r, int status,
     free(body);
     return MHD_NO;
   }
-  MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
+  if (ctype)
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
   if (compressible(ctype))
     MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Accept-Encoding");
   if (gz)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_ENCODING, "gzip");
-  MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
-  if (r->rid[0])
-    MHD_add_response_header(resp, "X-Request-Id", r->rid);
+  common_headers(r, resp);
+  if (ctype && !strncmp(ctype, "text/html", 9))
+    /* the explorer: its own files only, and calls to any daemon it is
+     * pointed at */
+    MHD_add_response_header(resp, "Content-Security-Policy",
+                            "default-src 'self'; connect-src 'self' http: "
+                            "https:; img-src 'self' data:; base-uri 'none'; "
+                            "form-action 'none'; frame-ancestors 'none'");
   if (r->etag) {
     /* the gzipped representation has its own validator */
     char tag[40];
@@ -355,9 +407,7 @@ static enum MHD_Result send_stream(struct MHD_Connection *c, req *r,
     MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Accept-Encoding");
   if (st->gz)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_ENCODING, "gzip");
-  MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
-  if (r->rid[0])
-    MHD_add_response_header(resp, "X-Request-Id", r->rid);
+  common_headers(r, resp);
   ok = MHD_queue_response(c, (unsigned)ar->status, resp);
   MHD_destroy_response(resp);
   r->status = ar->status;
@@ -943,12 +993,10 @@ static enum MHD_Result batch_start(struct srv_daemon *d,
   }
   MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
                           "application/x-ndjson");
-  MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff");
   MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Accept-Encoding");
   if (b->gz)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_ENCODING, "gzip");
-  if (r->rid[0])
-    MHD_add_response_header(resp, "X-Request-Id", r->rid);
+  common_headers(r, resp);
   r->batch = b;
   pthread_mutex_lock(&b->mu);
   dispatch(b);
@@ -1102,6 +1150,7 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
   request_id(d, c, r);
   r->gzip = accepts_gzip(c);
   client_of(d, c, r);
+  cors_of(d, c, r);
   srv_metrics_in_flight(d->metrics, +1);
   const char *bad = smuggling(c);
   if (bad) {
@@ -1116,6 +1165,12 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
                  NULL);
   const api_endpoint *row = api_endpoint_at(ep);
   r->ep = ep;
+  if (!strcmp(method, "OPTIONS")) {
+    /* what the path takes; a browser's preflight (answered on the next
+     * call, with CORS headers when the origin is allowed) */
+    snprintf(r->preflight, sizeof r->preflight, "%s, OPTIONS", row->method);
+    return MHD_YES;
+  }
   if (route == 405) {
     snprintf(r->p_detail, sizeof r->p_detail, "%s takes %s", row->path,
              row->method);
@@ -1210,18 +1265,20 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
   received(d, r);
   if (r->too_big)
     return too_large(d, c, r);
+  if (r->preflight[0])
+    return send_body(c, r, 204, NULL, 0, NULL, 0, r->preflight, 0);
   if (!r->is_post) {
     api_response ar;
-    if (!strcmp(api_endpoint_at(r->ep)->label, "openapi")) {
-      /* the contract changes only with the binary: a validator and a
-       * lifetime, and 304 to a client that has it */
-      r->etag = d->spec_etag;
+    if (d->etags[r->ep][0]) {
+      /* the contract and the explorer's files change only with the binary:
+       * a validator and a lifetime, and 304 to a client that has them */
+      r->etag = d->etags[r->ep];
       const char *inm =
           MHD_lookup_connection_value(c, MHD_HEADER_KIND, "If-None-Match");
       /* the validator of the representation that would be sent */
       char tag[40];
-      snprintf(tag, sizeof tag, "%.*s%s\"", (int)strlen(d->spec_etag) - 1,
-               d->spec_etag, r->gzip ? "-gzip" : "");
+      snprintf(tag, sizeof tag, "%.*s%s\"", (int)strlen(r->etag) - 1, r->etag,
+               r->gzip ? "-gzip" : "");
       if (inm && (strstr(inm, tag) || !strcmp(inm, "*")))
         return send_body(c, r, 304, NULL, 0, "application/json", 0, NULL, 0);
     }
@@ -1451,6 +1508,7 @@ static void daemon_free(struct srv_daemon *d) {
   srv_pool_free(d->pool);
   srv_metrics_free(d->metrics);
   pthread_mutex_destroy(&d->mu);
+  free(d->etags);
   free(d);
 }
 
@@ -1470,11 +1528,20 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
   if (getentropy(&d->rid_seed, sizeof d->rid_seed) != 0)
     d->rid_seed = (unsigned long long)time(NULL) * 0x9e3779b97f4a7c15ULL ^
                   (unsigned long long)getpid();
-  /* the contract's validator: FNV-1a of its text */
-  unsigned long long h = 0xcbf29ce484222325ULL;
-  for (const char *p = api_openapi_json(); *p; p++)
-    h = (h ^ (unsigned char)*p) * 0x100000001b3ULL;
-  snprintf(d->spec_etag, sizeof d->spec_etag, "\"%016llx\"", h);
+  /* the static answers' validators: FNV-1a of their bytes */
+  if (!(d->etags = calloc(api_endpoint_count(), sizeof *d->etags))) {
+    daemon_free(d);
+    return NULL;
+  }
+  for (size_t i = 0; i < api_endpoint_count(); i++) {
+    size_t n;
+    const char *s = api_static_body(i, &n);
+    unsigned long long h = 0xcbf29ce484222325ULL;
+    for (size_t k = 0; s && k < n; k++)
+      h = (h ^ (unsigned char)s[k]) * 0x100000001b3ULL;
+    if (s)
+      snprintf(d->etags[i], sizeof d->etags[i], "\"%016llx\"", h);
+  }
   srv_pool_cfg pc = {cfg->workers, cfg->client_workers, cfg->client_queue};
   if (!(d->metrics = srv_metrics_new()) || !(d->pool = srv_pool_new(&pc))) {
     daemon_free(d);

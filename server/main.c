@@ -137,6 +137,12 @@ static void usage(FILE *f, const srv_config *defaults) {
       "  --trusted-proxy ADDR      a proxy whose X-Forwarded-For names the\n"
       "                            client (repeatable, up to %d)\n",
       SRV_MAX_PROXIES);
+  fprintf(
+      f,
+      "  --cors-origin ORIGIN      an origin (http://host:port, or * for any)\n"
+      "                            whose pages may call the daemon from a\n"
+      "                            browser (repeatable, up to %d; none)\n",
+      SRV_MAX_ORIGINS);
   fprintf(f,
           "  --log-format json|plain   the access log's lines: JSON (time,\n"
           "                            request_id, client, method, path,\n"
@@ -146,7 +152,8 @@ static void usage(FILE *f, const srv_config *defaults) {
           "  --help                    this text\n\n"
           "Every option can also be set in the environment as STICKSLIP_ and\n"
           "its name in capitals with underscores (STICKSLIP_MAX_SECONDS=30,\n"
-          "STICKSLIP_QUIET=1, STICKSLIP_TRUSTED_PROXY=ADDR[,ADDR...]); the\n"
+          "STICKSLIP_QUIET=1, STICKSLIP_TRUSTED_PROXY=ADDR[,ADDR...],\n"
+          "STICKSLIP_CORS_ORIGIN=ORIGIN[,ORIGIN...]); the\n"
           "command line wins.\n");
 }
 
@@ -224,6 +231,31 @@ static int add_proxy(srv_config *cfg, const char *v) {
   return 0;
 }
 
+/* An origin as browsers send it: scheme://host[:port] with no path, or *. */
+static int add_origin(srv_config *cfg, const char *v) {
+  if (cfg->n_origins == SRV_MAX_ORIGINS) {
+    fprintf(stderr, "stickslipd: at most %d --cors-origin\n", SRV_MAX_ORIGINS);
+    return -1;
+  }
+  const char *host = v ? strstr(v, "://") : NULL;
+  int ok = v && strlen(v) < sizeof cfg->origins[0];
+  if (ok && strcmp(v, "*")) {
+    ok = host && host > v && host[3] && !strchr(host + 3, '/');
+    for (const char *p = v; ok && p < host; p++)
+      ok = (*p >= 'a' && *p <= 'z') || (*p >= '0' && *p <= '9') || *p == '+' ||
+           *p == '-' || *p == '.';
+    for (const char *p = ok ? host + 3 : ""; ok && *p; p++)
+      ok = *p > ' ' && *p < 0x7f && *p != ',' && *p != '"';
+  }
+  if (!ok) {
+    fprintf(stderr, "stickslipd: --cors-origin needs an origin as browsers "
+                    "send it (http://host:port, no path) or *\n");
+    return -1;
+  }
+  snprintf(cfg->origins[cfg->n_origins++], sizeof cfg->origins[0], "%s", v);
+  return 0;
+}
+
 /* Every option from the environment (STICKSLIP_...), before the flags. */
 static int from_environment(srv_config *cfg) {
   char name[64];
@@ -257,6 +289,14 @@ static int from_environment(srv_config *cfg) {
     for (char *save = NULL, *a = strtok_r(list, ",", &save); a;
          a = strtok_r(NULL, ",", &save))
       if (add_proxy(cfg, a))
+        return -1;
+  }
+  if ((env = getenv("STICKSLIP_CORS_ORIGIN")) && *env) {
+    char list[2048];
+    snprintf(list, sizeof list, "%s", env);
+    for (char *save = NULL, *a = strtok_r(list, ",", &save); a;
+         a = strtok_r(NULL, ",", &save))
+      if (add_origin(cfg, a))
         return -1;
   }
   return 0;
@@ -343,6 +383,10 @@ static int configure(srv_config *cfg, int argc, char **argv) {
       return 2;
     } else if (!strcmp(a, "--trusted-proxy")) {
       if (add_proxy(cfg, v))
+        return 2;
+      i++;
+    } else if (!strcmp(a, "--cors-origin")) {
+      if (add_origin(cfg, v))
         return 2;
       i++;
     } else if (!strcmp(a, "--log-format")) {

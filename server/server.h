@@ -10,6 +10,7 @@
 #include "stickslip_api.h"
 
 #define SRV_MAX_PROXIES 16
+#define SRV_MAX_ORIGINS 16
 
 /** Everything a flag or an environment variable can set. */
 typedef struct srv_config {
@@ -34,6 +35,10 @@ typedef struct srv_config {
    *  client, for the per-client queues */
   char trusted[SRV_MAX_PROXIES][48];
   int n_trusted;
+  /** --cors-origin (repeatable): origins whose pages may call the daemon
+   *  (scheme://host[:port], or * for any); none by default */
+  char origins[SRV_MAX_ORIGINS][128];
+  int n_origins;
 } srv_config;
 
 /* ---- the compute pool (pool.c) ----------------------------------------- */

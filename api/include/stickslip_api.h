@@ -227,6 +227,18 @@ void api_problem(api_response *out, api_problem_kind kind, const char *detail,
 /** The OpenAPI document (api/openapi.yaml, which is written in JSON syntax). */
 const char *api_openapi_json(void);
 
+/** The explorer's embedded files (api/explorer): "index.html", "app.js" or
+ *  "style.css", their length into *len; NULL for another name. */
+const char *api_explorer_asset(const char *name, size_t *len);
+
+/**
+ * The body of row @a i when it is static (the contract and the explorer's
+ * files: the same bytes for the life of the binary, so that a server can
+ * give them a validator and a lifetime), its length into *len; NULL for a
+ * row whose answer is computed.
+ */
+const char *api_static_body(size_t i, size_t *len);
+
 /** The version string of the service (the library's SS_VERSION). */
 const char *api_version(void);
 

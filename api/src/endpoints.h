@@ -53,7 +53,14 @@
   X(OPENAPI, "GET", "/openapi.json", "openapi", API_RUN_INLINE,                \
     ep_meta_decode, ep_meta_run, ep_openapi_encode, ep_meta_release)           \
   X(METRICS, "GET", "/metrics", "metrics", API_RUN_INLINE, ep_meta_decode,     \
-    ep_meta_run, ep_metrics_encode, ep_meta_release)
+    ep_meta_run, ep_metrics_encode, ep_meta_release)                           \
+  X(EXPLORER, "GET", "/", "explorer", API_RUN_INLINE, ep_meta_decode,          \
+    ep_meta_run, ep_explorer_encode, ep_meta_release)                          \
+  X(EXPLORER_JS, "GET", "/explorer/app.js", "explorer_js", API_RUN_INLINE,     \
+    ep_meta_decode, ep_meta_run, ep_explorer_js_encode, ep_meta_release)       \
+  X(EXPLORER_CSS, "GET", "/explorer/style.css", "explorer_css",                \
+    API_RUN_INLINE, ep_meta_decode, ep_meta_run, ep_explorer_css_encode,       \
+    ep_meta_release)
 
 typedef int ep_decode_fn(const json_t *root, const api_call *c, void **x);
 typedef int ep_run_fn(void *x, const api_call *c);

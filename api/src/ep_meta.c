@@ -1,6 +1,7 @@
 /*
  * ep_meta.c: the endpoints that describe the service rather than compute:
- * GET /health, /version, /openapi.json, /metrics.  They have no body, so
+ * GET /health, /version, /openapi.json, /metrics, and the explorer (GET /
+ * and its assets).  They have no body, so
  * decode and run do nothing; what the server knows of itself (uptime,
  * requests in flight, metrics) comes in c->srv.
  */
@@ -66,6 +67,53 @@ int ep_openapi_encode(const void *x, const api_call *c, api_response *out) {
   const char *s = api_openapi_json();
   (void)x;
   return text(s, strlen(s), "application/json", out, c->e);
+}
+
+/* The explorer (api/explorer, embedded): its page and its two assets. */
+static const struct {
+  const char *label, *file, *ctype;
+} ASSETS[] = {
+    {"explorer", "index.html", "text/html; charset=utf-8"},
+    {"explorer_js", "app.js", "text/javascript; charset=utf-8"},
+    {"explorer_css", "style.css", "text/css; charset=utf-8"},
+};
+
+static int asset(int k, const api_call *c, api_response *out) {
+  size_t n;
+  const char *s = api_explorer_asset(ASSETS[k].file, &n);
+  return text(s, n, ASSETS[k].ctype, out, c->e);
+}
+
+int ep_explorer_encode(const void *x, const api_call *c, api_response *out) {
+  (void)x;
+  return asset(0, c, out);
+}
+
+int ep_explorer_js_encode(const void *x, const api_call *c, api_response *out) {
+  (void)x;
+  return asset(1, c, out);
+}
+
+int ep_explorer_css_encode(const void *x, const api_call *c,
+                           api_response *out) {
+  (void)x;
+  return asset(2, c, out);
+}
+
+const char *api_static_body(size_t i, size_t *len) {
+  const api_endpoint *ep = api_endpoint_at(i);
+  *len = 0;
+  if (!ep)
+    return NULL;
+  if (!strcmp(ep->label, "openapi")) {
+    const char *s = api_openapi_json();
+    *len = strlen(s);
+    return s;
+  }
+  for (size_t k = 0; k < sizeof ASSETS / sizeof ASSETS[0]; k++)
+    if (!strcmp(ep->label, ASSETS[k].label))
+      return api_explorer_asset(ASSETS[k].file, len);
+  return NULL;
 }
 
 int ep_metrics_encode(const void *x, const api_call *c, api_response *out) {
