@@ -62,7 +62,7 @@ extern "C" {
 /* The version: the one place it is written.  The build (CMakeLists.txt),
  * the daemon and its OpenAPI document read it from here. */
 #define SS_VERSION_MAJOR 0
-#define SS_VERSION_MINOR 2
+#define SS_VERSION_MINOR 3
 #define SS_VERSION_PATCH 0
 #define SS_VERSION_HEX                                                         \
   ((SS_VERSION_MAJOR << 16) | (SS_VERSION_MINOR << 8) | SS_VERSION_PATCH)
@@ -448,6 +448,31 @@ typedef struct ss_sim_opts {
   /** Or explicit sample times in [t0, t_end], ascending (not both). */
   const double *sample_times;
   size_t n_sample_times; /**< how many sample_times */
+  /**
+   * Or, when > 0, samples placed for a curve: over [sample_from, sample_to],
+   * as few as the bound below allows, so that the polyline through them
+   * lies within sample_tolerance of the true curve in the coordinates of
+   * sample_axes, each divided by its sample_scale.  Every event inside the
+   * window is sampled twice, at the same time: with the mode before and
+   * with the mode after (a corner of the curve is a vertex of the polyline,
+   * and the polyline splits by mode there).  A stick's straight x2 and x2'
+   * cost its two ends.
+   *
+   * The bound: on a step h from local time u, each coordinate differs from
+   * the chord (at the same time) by at most h^2/8 max|c''|, and
+   * max|c''| <= |c''(u + h/2)| + (h/2) sum_k R_k w_k^3 from the closed
+   * form's terms (amplitude R_k, frequency w_k); the scaled Euclidean norm of
+   * these must be <= sample_tolerance.  The distance to the polyline is at
+   * most the distance to the chord's point at the same time, so the bound
+   * holds for it (up to rounding, about 1e-15 of the coordinates).
+   * The count is limited by max_samples (SS_ELIMIT_SAMPLES beyond it).
+   */
+  double sample_tolerance;
+  /** The coordinates of sample_tolerance's distance: bit 1 x1, 2 x2, 4 x1',
+   *  8 x2' (0: all four). */
+  unsigned sample_axes;
+  /** Divides each coordinate's difference (x1, x2, x1', x2'; 0: 1). */
+  double sample_scale[4];
   /** Limit: more events than this is SS_ELIMIT_EVENTS (0: none). */
   size_t max_events;
   size_t max_samples; /**< limit on samples (0: none) */

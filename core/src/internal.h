@@ -27,6 +27,14 @@ void ss__modal(const ss_model *m, const double zb[4], double q[2],
 void ss__switching(const ss_model *m, ss_mode mode, int sign, const double x[4],
                    ss_trig *g);
 
+/* The motion in @a mode from the anchor state x, coordinate by coordinate
+ * (x1, x2, x1', x2'), as functions of local time: free oscillations are two
+ * modal terms about their equilibrium, the stick is a line plus one term
+ * (x1, x1') or a line (x2, x2').  They are the closed forms of ss_flow(),
+ * written so that their derivatives and bounds on them come for free. */
+void ss__coords(const ss_model *m, ss_mode mode, const double x[4],
+                ss_trig g[4]);
+
 /* Error-free sum of two doubles (Knuth's TwoSum). */
 static inline void ss__two_sum(double a, double b, double *s, double *e) {
   double x = a + b;

@@ -171,6 +171,48 @@ void ss_flow(const ss_model *m, ss_mode mode, double t, const double x0[4],
   }
 }
 
+void ss__coords(const ss_model *m, ss_mode mode, const double x[4],
+                ss_trig g[4]) {
+  memset(g, 0, 4 * sizeof *g);
+  if (mode == SS_MODE_STICK) {
+    double chi = m->p.chi, V = m->p.V;
+    double a = x[0] - chi * x[1], b = x[2] - chi * V;
+    /* x1 = chi (x2(0) + V t) + a cos t + b sin t, x1' = chi V - a sin t +
+     * b cos t, x2 = x2(0) + V t, x2' = V */
+    g[0].c0 = chi * x[1];
+    g[0].c1 = chi * V;
+    g[0].n = 1;
+    g[0].w[0] = 1;
+    g[0].a[0] = a;
+    g[0].b[0] = b;
+    g[1].c0 = x[1];
+    g[1].c1 = V;
+    g[2].c0 = chi * V;
+    g[2].n = 1;
+    g[2].w[0] = 1;
+    g[2].a[0] = b;
+    g[2].b[0] = -a;
+    g[3].c0 = V;
+    return;
+  }
+  double sgn = mode == SS_MODE_SLIP ? 1.0 : -1.0;
+  double zb[4] = {x[0] - sgn * m->d0[0], x[1] - sgn * m->d0[1], x[2], x[3]};
+  double q[2], qd[2];
+  ss__modal(m, zb, q, qd);
+  for (int i = 0; i < 2; i++) {
+    g[i].c0 = sgn * m->d0[i];
+    g[i].n = g[i + 2].n = 2;
+    for (int k = 0; k < 2; k++) {
+      double w = m->w[k];
+      g[i].w[k] = g[i + 2].w[k] = w;
+      g[i].a[k] = m->phi[i][k] * q[k];
+      g[i].b[k] = m->phi[i][k] * qd[k] / w;
+      g[i + 2].a[k] = m->phi[i][k] * qd[k];
+      g[i + 2].b[k] = -m->phi[i][k] * q[k] * w;
+    }
+  }
+}
+
 /* B = phi diag(v) phiinv, 2x2. */
 static void modal_matrix(const ss_model *m, const double v[2], double B[2][2]) {
   for (int i = 0; i < 2; i++)

@@ -262,6 +262,11 @@ typedef struct sampler {
   const ss_sim_opts *o;
   size_t n, i; /* total and next index */
   ss_sim_result *r;
+  /* adaptive samples (o->sample_tolerance > 0): grown as they come */
+  int adaptive;
+  size_t cap;
+  double inv_scale[4]; /* 1/scale of each coordinate, 0 when not measured */
+  int status;          /* SS_OK, or why the sampling stopped */
 } sampler;
 
 static double sample_time(const sampler *sp, size_t i) {
@@ -289,15 +294,171 @@ static void emit_samples(sampler *sp, const ss_sim *s, double t_until,
   }
 }
 
+/* ---- samples placed for a curve (sample_tolerance) ---- */
+
+/* One more sample at absolute time t in the current phase of s. */
+static int push_sample(sampler *sp, const ss_sim *s, double t) {
+  ss_sim_result *r = sp->r;
+  size_t max = sp->o->max_samples;
+  if (sp->status)
+    return sp->status;
+  if (max && sp->i >= max)
+    return sp->status = SS_ELIMIT_SAMPLES;
+  if (sp->i == sp->cap) {
+    size_t nc = sp->cap ? 2 * sp->cap : 256;
+    if (max && nc > max)
+      nc = max;
+    double *st = realloc(r->st, nc * sizeof *st);
+    if (st)
+      r->st = st;
+    double *sx = st ? realloc(r->sx, 4 * nc * sizeof *sx) : NULL;
+    if (sx)
+      r->sx = sx;
+    unsigned char *sm = sx ? realloc(r->smode, nc) : NULL;
+    if (!sm)
+      return sp->status = SS_ENOMEM;
+    r->smode = sm;
+    sp->cap = nc;
+  }
+  ss_sim_state_at(s, t, r->sx + 4 * sp->i);
+  r->st[sp->i] = t;
+  r->smode[sp->i] = (unsigned char)s->mode;
+  sp->i++;
+  return SS_OK;
+}
+
+/* The bound of ss_sim_opts.sample_tolerance on the chord over local times
+ * [u, u + h] of the coordinates g (b3: their third-derivative bounds), in
+ * scaled coordinates c:
+ * - at equal times: |c(t) - chord(t)| <= h^2/8 max|c''|, with
+ *   max|c''| <= |c''(mid)| + (h/2)|b3|;
+ * - across: when the projection of c(t) on the chord's direction e moves
+ *   forward all along (c'.e >= c'(mid).e - (h/2) max|c''| > 0), c(t) stays
+ *   over the segment and its distance to it is that of f = P(c - c(u)), P
+ *   the projection across e: f vanishes at both ends, so
+ *   |f| <= h^2/8 max|P c''| <= h^2/8 (|P c''(mid)| + (h/2)|b3|).
+ * The smaller of the two holds. */
+static double chord_bound(const sampler *sp, const ss_trig g[4],
+                          const double b3[4], double u, double h) {
+  double c0[4], c1[4], v[4], acc[4], B = 0, A = 0, L = 0;
+  for (int i = 0; i < 4; i++) {
+    double s = sp->inv_scale[i], e0[1], e1[1], dm[3];
+    c0[i] = c1[i] = v[i] = acc[i] = 0;
+    if (s == 0)
+      continue;
+    ss_trig_eval(&g[i], u, 0, e0);
+    ss_trig_eval(&g[i], u + h, 0, e1);
+    ss_trig_eval(&g[i], u + 0.5 * h, 2, dm);
+    c0[i] = s * e0[0];
+    c1[i] = s * e1[0];
+    v[i] = s * dm[1];
+    acc[i] = s * dm[2];
+    B += (s * b3[i]) * (s * b3[i]);
+    A += acc[i] * acc[i];
+    L += (c1[i] - c0[i]) * (c1[i] - c0[i]);
+  }
+  B = 0.5 * h * sqrt(B);
+  double amax = sqrt(A) + B, best = 0.125 * h * h * amax;
+  if (L > 0) {
+    L = sqrt(L);
+    double ve = 0, ae = 0;
+    for (int i = 0; i < 4; i++) {
+      ve += v[i] * (c1[i] - c0[i]) / L;
+      ae += acc[i] * (c1[i] - c0[i]) / L;
+    }
+    double across = sqrt(fmax(0, A - ae * ae));
+    if (ve - 0.5 * h * amax > 0)
+      best = fmin(best, 0.125 * h * h * (across + B));
+  }
+  return best;
+}
+
+/* The samples of the current phase of s over absolute times [a, b] (within
+ * the phase): a, the points the tolerance needs, and b. */
+static void sample_phase(sampler *sp, const ss_sim *s, double a, double b) {
+  if (b < a || push_sample(sp, s, a))
+    return;
+  if (b == a)
+    return;
+  ss_trig g[4];
+  double b3[4];
+  ss__coords(s->m, s->mode, s->x, g);
+  for (int i = 0; i < 4; i++) {
+    b3[i] = 0;
+    for (int k = 0; k < g[i].n; k++)
+      b3[i] += hypot(g[i].a[k], g[i].b[k]) * g[i].w[k] * g[i].w[k] * g[i].w[k];
+  }
+  double eps = sp->o->sample_tolerance;
+  double ua = local_time(s, a), ub = local_time(s, b), u = ua, h = ub - ua;
+  /* below this a step is at the rounding level of the times themselves */
+  double h_min = 8 * DBL_EPSILON * fmax(1.0, fmax(fabs(ub), fabs(s->t_hi)));
+  while (ub - u > h_min) {
+    if (h > ub - u)
+      h = ub - u;
+    double E = chord_bound(sp, g, b3, u, h);
+    while (E > eps && h > h_min) {
+      double f = 0.9 * sqrt(eps / E);
+      h *= f < 0.1 ? 0.1 : f > 0.9 ? 0.9 : f;
+      E = chord_bound(sp, g, b3, u, h);
+    }
+    u += h;
+    if (ub - u <= h_min)
+      break;
+    if (push_sample(sp, s, s->t_hi + (s->t_lo + u)))
+      return;
+    /* the next step as this one's error predicts, at most doubled */
+    double f = E > 0 ? 0.9 * sqrt(eps / E) : 2;
+    h *= f > 2 ? 2 : f < 1 ? 1 : f;
+  }
+  push_sample(sp, s, b);
+}
+
+/* The part of the current phase of s up to absolute time t_until that lies
+ * in the sample window. */
+static void sample_window(sampler *sp, const ss_sim *s, double t_until) {
+  double a = fmax(ss_sim_time(s), sp->o->sample_from);
+  double b = fmin(t_until, sp->o->sample_to);
+  if (!sp->status && b >= a)
+    sample_phase(sp, s, a, b);
+}
+
+/* The sampler's status as the run's: a limit or a failure, with its
+ * reason in d. */
+static int sampled(const sampler *sp, ss_diag *d) {
+  if (sp->status == SS_ELIMIT_SAMPLES)
+    return ss__fail(d, SS_ELIMIT_SAMPLES, "max_samples",
+                    (double)sp->o->max_samples,
+                    "the tolerance %g needs more than %zu samples",
+                    sp->o->sample_tolerance, sp->o->max_samples);
+  if (sp->status)
+    return ss__fail(d, sp->status, "samples", 0, "out of memory");
+  return SS_OK;
+}
+
 static int check_opts(const ss_sim_opts *o, size_t *n_samples, ss_diag *d) {
   if (!isfinite(o->t0))
     return ss__fail(d, SS_EINVAL, "t0", o->t0, "t0 must be finite");
   if (!isfinite(o->t_end) || !(o->t_end >= o->t0))
     return ss__fail(d, SS_EINVAL, "t_end", o->t_end,
                     "t_end must be finite and not before the start time");
-  if (o->sample_times && o->n_samples)
+  if ((o->sample_times != NULL) + (o->n_samples > 0) +
+          (o->sample_tolerance != 0) >
+      1)
     return ss__fail(d, SS_EINVAL, "samples", 0,
-                    "give either sample times or an even sample count");
+                    "give one of sample times, an even sample count or a "
+                    "tolerance");
+  if (o->sample_tolerance != 0) {
+    if (!(o->sample_tolerance > 0) || !isfinite(o->sample_tolerance))
+      return ss__fail(d, SS_EINVAL, "tolerance", o->sample_tolerance,
+                      "the sample tolerance must be a positive number");
+    for (int i = 0; i < 4; i++)
+      if (!(o->sample_scale[i] >= 0) || !isfinite(o->sample_scale[i]))
+        return ss__fail(d, SS_EINVAL, "scale", o->sample_scale[i],
+                        "a sample scale must be a positive number (0: 1)");
+    if (o->sample_axes > 15)
+      return ss__fail(d, SS_EINVAL, "axes", o->sample_axes,
+                      "sample axes are bits 1, 2, 4, 8 (x1, x2, x1', x2')");
+  }
   if (o->sample_times) {
     for (size_t i = 0; i < o->n_sample_times; i++) {
       double t = o->sample_times[i];
@@ -310,7 +471,7 @@ static int check_opts(const ss_sim_opts *o, size_t *n_samples, ss_diag *d) {
                         "sample times must be ascending (index %zu)", i);
     }
     *n_samples = o->n_sample_times;
-  } else if (o->n_samples) {
+  } else if (o->n_samples || o->sample_tolerance != 0) {
     if (!isfinite(o->sample_from) || !isfinite(o->sample_to) ||
         o->sample_from < o->t0 || o->sample_to > o->t_end ||
         o->sample_from > o->sample_to)
@@ -380,10 +541,14 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
     }
   }
   r->n_samples = ns;
+  memset(&sp, 0, sizeof sp);
   sp.o = o;
   sp.n = ns;
-  sp.i = 0;
   sp.r = r;
+  sp.adaptive = o->sample_tolerance > 0;
+  for (int i = 0; i < 4; i++)
+    if (!o->sample_axes || (o->sample_axes & (1u << i)))
+      sp.inv_scale[i] = o->sample_scale[i] > 0 ? 1 / o->sample_scale[i] : 1;
   if (o->max_seconds > 0)
     t_start = ss__now();
   for (;;) {
@@ -405,9 +570,15 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
     }
     if ((r->n_events & 255) == 255 && (rc = must_stop(o, t_start, d, &s)))
       goto partial;
-    /* samples of this phase, strictly before the event */
+    /* samples of this phase, strictly before the event (or, placed for a
+     * curve, up to it) */
     if (sp.i < sp.n)
       emit_samples(&sp, &s, s.t_hi + (s.t_lo + tau), 1);
+    if (sp.adaptive) {
+      sample_window(&sp, &s, s.t_hi + (s.t_lo + tau));
+      if ((rc = sampled(&sp, d)))
+        goto stopped;
+    }
     ss_event ev;
     sim_commit(&s, &ev);
     if (ev.kind == SS_EVENT_GRAZING)
@@ -423,16 +594,30 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
       memcpy(r->x, ev.x, sizeof ev.x);
       if (sp.i < sp.n)
         emit_samples(&sp, &s, ev.t, 0);
+      if (sp.adaptive) {
+        sample_window(&sp, &s, ev.t);
+        if ((rc = sampled(&sp, d)))
+          goto stopped;
+      }
       r->n_samples = sp.i;
       return SS_OK;
     }
   }
   emit_samples(&sp, &s, o->t_end, 0);
+  if (sp.adaptive) {
+    sample_window(&sp, &s, o->t_end);
+    if ((rc = sampled(&sp, d)))
+      goto stopped;
+    r->n_samples = sp.i;
+  }
   r->t = o->t_end;
   r->mode = s.mode;
   r->perpetual = s.perpetual;
   ss_sim_state_at(&s, o->t_end, r->x);
   return SS_OK;
+stopped:
+  if (rc == SS_ENOMEM)
+    goto fail;
 partial:
   r->t = ss_sim_time(&s);
   r->mode = s.mode;
