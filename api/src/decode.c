@@ -104,12 +104,29 @@ static int groups(const api_spec *s, const json_t *obj, const char *ptr,
       }
     }
     if (first_field >= 0 && chosen[g] < 0) {
-      alt_names(s, g, 0, ptr, a, sizeof a);
-      alt_names(s, g, 1, ptr, b, sizeof b);
+      /* every alternative, "x, y or z" */
+      char all[400] = "";
+      int last = -1;
+      for (int alt = 0; alt < 8; alt++) {
+        alt_names(s, g, alt, ptr, a, sizeof a);
+        if (a[0])
+          last = alt;
+      }
+      for (int alt = 0, k = 0; alt < 8; alt++) {
+        alt_names(s, g, alt, ptr, a, sizeof a);
+        if (!a[0])
+          continue;
+        size_t l = strlen(all);
+        snprintf(all + l, sizeof all - l, "%s%s",
+                 k == 0        ? ""
+                 : alt == last ? " or "
+                               : ", ",
+                 a);
+        k++;
+      }
       join(p, sizeof p, ptr, s->fields[first_field].name);
       return api__fail(e, API_P_MISSING_FIELD, p,
-                       "the required field %s is missing: give %s or %s", p, a,
-                       b);
+                       "the required field %s is missing: give %s", p, all);
     }
   }
   return 0;

@@ -48,32 +48,47 @@ int api__answer(json_t *out, const api_spec *spec, const void *x,
   return api__json_response(out, c, resp);
 }
 
-/* Sample i of column k (t, x1, x2, v1, v2, mode) of the result a. */
+/* Sample i of column k of API_SAMPLE_COLUMNS of the result a: time and
+ * state in the request's units; the mode; the stick force chi (x2 - x1)
+ * and the constraints of the paper's section 5, F1 = force + ur (> 0 in a
+ * stick) and F2 = force - ur (<= 0), dimensionless as the margins are. */
 static void sample_item(api_wbuf *w, const api_lazy *l, size_t i) {
   const ss_sim_result *r = l->a;
   const api_params *ap = l->b;
+  const double *xi = r->sx + 4 * i;
   double t, x[4];
   if (l->k == 5) {
     const char *m = ss_mode_name((ss_mode)r->smode[i]);
     api__w_str(w, m, strlen(m));
     return;
   }
-  ss_to_physical(ap->omega, r->st[i], r->sx + 4 * i, &t, x);
+  if (l->k >= 6) {
+    double force = ap->p.chi * (xi[1] - xi[0]);
+    api__w_real(w, l->k == 6   ? force
+                   : l->k == 7 ? force + ap->p.ur
+                               : force - ap->p.ur);
+    return;
+  }
+  ss_to_physical(ap->omega, r->st[i], xi, &t, x);
   api__w_real(w, l->k == 0 ? t : x[l->k - 1]);
 }
 
 json_t *api__samples(const ss_sim_result *r, const api_params *ap,
-                     const api_call *c) {
-  static const char *const names[6] = {"t", "x1", "x2", "v1", "v2", "mode"};
+                     unsigned columns, const api_call *c) {
   json_t *s = json_object();
   size_t per = sizeof *r->st + 4 * sizeof *r->sx + sizeof *r->smode;
-  for (int k = 0; k < 6; k++)
-    if (api__set(s, names[k],
+  int first = 1;
+  for (int k = 0; API_SAMPLE_COLUMNS[k]; k++) {
+    if (!(columns & (1u << k)))
+      continue;
+    if (api__set(s, API_SAMPLE_COLUMNS[k],
                  api__lazy(c, r->n_samples, sample_item, r, ap, k,
-                           k == 0 ? r->n_samples * per : 0))) {
+                           first ? r->n_samples * per : 0))) {
       json_decref(s);
       return NULL;
     }
+    first = 0;
+  }
   return s;
 }
 

@@ -18,7 +18,9 @@ typedef struct orbit_x {
   int kind;
   api_guess guess;
   int has_guess;
-  long long samples, effort, max_period;
+  api_samples_req samples; /* an integer n, or the object */
+  int samples_object;      /* given as the object */
+  long long effort, max_period;
   int finite_difference;
   /* for the core, dimensionless */
   ss_model m;
@@ -30,14 +32,48 @@ typedef struct orbit_x {
   ss_sim_result *paths; /* n sampled periods when samples > 0 */
 } orbit_x;
 
+/* "samples": n (evenly over each period), or {"n"} or {"tolerance", ...}
+ * with "fields" (samples.c). */
+static int decode_samples(const json_t *v, const char *ptr, void *dest,
+                          const api_call *c) {
+  orbit_x *x = (orbit_x *)((char *)dest - offsetof(orbit_x, samples));
+  if (json_is_object(v)) {
+    x->samples_object = 1;
+    return api__decode(&API_ORBIT_SAMPLES, v, ptr, &x->samples, c);
+  }
+  json_int_t n = json_is_integer(v) ? json_integer_value(v) : -1;
+  if (n < 0)
+    return api__fail(c->e, API_P_INVALID_TYPE, ptr,
+                     "%s must be a whole number of samples per period, or an "
+                     "object ({\"n\"} or {\"tolerance\"}, with \"fields\")",
+                     ptr);
+  if ((unsigned long long)n > c->lim->max_samples)
+    return api__limit(c->e, "max_samples", (double)c->lim->max_samples, ptr,
+                      "%lld samples, the limit is %zu", (long long)n,
+                      c->lim->max_samples);
+  x->samples.n = n;
+  x->samples.has_n = n > 0;
+  return 0;
+}
+
+static json_t *echo_samples(const void *dest) {
+  const orbit_x *x =
+      (const orbit_x *)((const char *)dest - offsetof(orbit_x, samples));
+  if (x->samples_object)
+    return api__echo(&API_ORBIT_SAMPLES, &x->samples);
+  return json_integer(x->samples.n);
+}
+
+static const api_custom SAMPLES = {decode_samples, echo_samples};
+
 static const api_field FIELDS[] = {
     API_PARAMS_FIELDS(orbit_x, ap),
     {"kind", API_T_ENUM, API_DEFAULT, 0, 0, NULL, offsetof(orbit_x, kind), 0, 0,
      0, KINDS},
     {"guess", API_T_OBJECT, 0, 0, 0, NULL, offsetof(orbit_x, guess),
      API_HAS(orbit_x, has_guess), 0, 0, &API_GUESS_SPEC},
-    {"samples", API_T_COUNT, API_DEFAULT, 0, 1e9, "max_samples",
-     offsetof(orbit_x, samples)},
+    {"samples", API_T_CUSTOM, API_DEFAULT, 0, 0, NULL,
+     offsetof(orbit_x, samples), 0, 0, 0, &SAMPLES},
     {"effort", API_T_COUNT, API_DEFAULT, 1, 3, NULL, offsetof(orbit_x, effort)},
     {"max_period", API_T_COUNT, API_DEFAULT, 1, 8, NULL,
      offsetof(orbit_x, max_period)},
@@ -87,9 +123,11 @@ int ep_orbit_decode(const json_t *root, const api_call *c, void **xp) {
   return api__model(&x->m, &x->ap, c);
 }
 
-/* One period of each orbit, sampled evenly, for plotting. */
+/* One period of each orbit, sampled evenly or placed for a curve, for
+ * plotting. */
 static int sample_paths(orbit_x *x, const api_call *c) {
-  if (x->samples == 0 || x->n == 0)
+  const api_samples_req *s = &x->samples;
+  if (!(s->has_n || s->has_tolerance) || x->n == 0)
     return 0;
   if (!(x->paths = calloc((size_t)x->n, sizeof *x->paths)))
     return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
@@ -98,13 +136,22 @@ static int sample_paths(orbit_x *x, const api_call *c) {
     ss_sim_opts so;
     memset(&so, 0, sizeof so);
     so.t_end = o->period;
-    so.n_samples = (size_t)x->samples;
+    so.n_samples = s->has_n ? (size_t)s->n : 0;
     so.sample_to = o->period;
+    if (api__samples_core(s, &x->ap, "/samples", &so, c))
+      return -1;
     so.max_events = 64 * (size_t)o->n_phases;
     so.max_seconds = c->lim->max_seconds;
     so.cancelled = x->opts.cancelled;
     so.cancel_cls = x->opts.cancel_cls;
     int rc = ss_simulate(&x->m, o->x0, &so, &x->paths[i], NULL);
+    if (rc == SS_ELIMIT_SAMPLES)
+      return api__status_limit(
+          c->e, rc, "max_samples", (double)so.max_samples, "/samples/tolerance",
+          "the tolerance %g needs more than %zu samples over the period of "
+          "orbit %d; give a larger tolerance or scale, or a larger max (up "
+          "to the limit of %zu)",
+          so.sample_tolerance, so.max_samples, i, c->lim->max_samples);
     if (rc != SS_OK)
       ss_sim_result_free(&x->paths[i]);
   }
@@ -128,11 +175,11 @@ int ep_orbit_run(void *xp, const api_call *c) {
                              lim->max_seconds);
   if (rc)
     return api__from_diag(c->e, rc, &d, "");
-  if ((size_t)x->samples * (size_t)(x->n ? x->n : 1) > lim->max_samples)
+  if ((size_t)x->samples.n * (size_t)(x->n ? x->n : 1) > lim->max_samples)
     return api__limit(c->e, "max_samples", (double)lim->max_samples, "/samples",
                       "%lld samples for each of %d orbits is over the limit "
                       "of %zu",
-                      x->samples, x->n, lim->max_samples);
+                      x->samples.n, x->n, lim->max_samples);
   return sample_paths(x, c);
 }
 
@@ -166,7 +213,8 @@ static json_t *margins_json(const ss_orbit *o, const api_params *ap) {
 }
 
 static json_t *orbit_json(const ss_orbit *o, const ss_sim_result *path,
-                          const api_params *ap, const api_call *c) {
+                          const api_params *ap, unsigned columns,
+                          const api_call *c) {
   json_t *j = json_object();
   api__set(j, "kind", json_string(ss_orbit_kind_name(o->kind)));
   api__set(j, "phases", api__phases(o->n_phases, o->modes, o->durations, ap));
@@ -181,7 +229,7 @@ static json_t *orbit_json(const ss_orbit *o, const ss_sim_result *path,
   api__set(j, "iterations", json_integer(o->iterations));
   api__set(j, "source", json_string(ss_orbit_source_name(o->source)));
   if (path && path->n_samples)
-    api__set(j, "samples", api__samples(path, ap, c));
+    api__set(j, "samples", api__samples(path, ap, columns, c));
   return j;
 }
 
@@ -225,8 +273,8 @@ int ep_orbit_encode(const void *xp, const api_call *c, api_response *out) {
   json_t *o = json_object(), *arr = json_array();
   for (int i = 0; i < x->n; i++)
     json_array_append_new(
-        arr,
-        orbit_json(&x->orbits[i], x->paths ? &x->paths[i] : NULL, &x->ap, c));
+        arr, orbit_json(&x->orbits[i], x->paths ? &x->paths[i] : NULL, &x->ap,
+                        api__samples_columns(&x->samples), c));
   api__set(o, "orbits", arr);
   /* reason explains an absence; a rejection is told with its numbers */
   if (x->n == 0 && x->rep.reason[0])
@@ -245,5 +293,6 @@ void ep_orbit_release(void *xp) {
     ss_sim_result_free(&x->paths[i]);
   free(x->paths);
   free(x->orbits);
+  api__samples_release(&x->samples);
   free(x);
 }

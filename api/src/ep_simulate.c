@@ -1,27 +1,13 @@
 /*
  * ep_simulate.c: POST /simulate, the exact event-driven motion from any
  * state.  The client chooses what is computed: events listed or not,
- * samples evenly spaced or at given times, or only the final state.
+ * samples evenly spaced, at given times or placed for a curve to a
+ * tolerance, their columns, or only the final state.
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "endpoints.h"
-
-/* Sample times as given (malloc'd). */
-typedef struct sim_times {
-  double *v;
-  size_t n;
-} sim_times;
-
-/* "samples": {"n", "from", "to"} or {"t": [...]}. */
-typedef struct sim_samples {
-  long long n;
-  double from, to;
-  int has_n, has_from, has_to;
-  sim_times t;
-  int has_t;
-} sim_samples;
 
 typedef struct sim_x {
   /* the request, in its own units */
@@ -33,7 +19,7 @@ typedef struct sim_x {
   int events;
   long long stop_after;
   int has_stop_after;
-  sim_samples samples;
+  api_samples_req samples;
   int has_samples;
   /* for the core, dimensionless */
   ss_model m;
@@ -42,42 +28,6 @@ typedef struct sim_x {
   ss_sim_opts o;
   ss_sim_result r;
 } sim_x;
-
-static int decode_times(const json_t *v, const char *ptr, void *dest,
-                        const api_call *c) {
-  sim_times *s = dest;
-  size_t n = json_is_array(v) ? json_array_size(v) : 0;
-  if (n == 0)
-    return api__fail(c->e, API_P_INVALID_TYPE, ptr,
-                     "%s must be a non-empty array of times", ptr);
-  if (n > c->lim->max_samples)
-    return api__limit(c->e, "max_samples", (double)c->lim->max_samples, ptr,
-                      "%zu sample times, the limit is %zu", n,
-                      c->lim->max_samples);
-  if (!(s->v = malloc(n * sizeof *s->v)))
-    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
-  s->n = n;
-  return api__numbers(v, ptr, s->v, c->e);
-}
-
-static json_t *echo_nothing(const void *dest) {
-  (void)dest;
-  return NULL;
-}
-
-static const api_custom TIMES = {decode_times, echo_nothing};
-
-static const api_field SAMPLE_FIELDS[] = {
-    {"n", API_T_COUNT, API_REQUIRED, 1, 1e9, "max_samples",
-     offsetof(sim_samples, n), API_HAS(sim_samples, has_n), 1, 0},
-    {"from", API_T_NUMBER, 0, 0, 0, NULL, offsetof(sim_samples, from),
-     API_HAS(sim_samples, has_from), 1, 0},
-    {"to", API_T_NUMBER, 0, 0, 0, NULL, offsetof(sim_samples, to),
-     API_HAS(sim_samples, has_to), 1, 0},
-    {"t", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL, offsetof(sim_samples, t),
-     API_HAS(sim_samples, has_t), 1, 1, &TIMES},
-};
-static const api_spec SAMPLE_SPEC = API_SPEC(SAMPLE_FIELDS);
 
 /* An orbit as /orbit returns it: only its start x0 is used. */
 #define X0                                                                     \
@@ -98,14 +48,17 @@ static const api_field FIELDS[] = {
     {"stop_after", API_T_COUNT, 0, 1, 1e18, "max_events",
      offsetof(sim_x, stop_after), API_HAS(sim_x, has_stop_after)},
     {"samples", API_T_OBJECT, API_ECHO_NEVER, 0, 0, NULL,
-     offsetof(sim_x, samples), API_HAS(sim_x, has_samples), 0, 0, &SAMPLE_SPEC},
+     offsetof(sim_x, samples), API_HAS(sim_x, has_samples), 0, 0,
+     &API_SIM_SAMPLES},
 };
 static const api_spec SPEC = API_SPEC(FIELDS);
 
 /* The sample times or window, dimensionless, checked against the run. */
 static int samples_to_core(sim_x *x, const api_call *c) {
-  const sim_samples *s = &x->samples;
+  const api_samples_req *s = &x->samples;
   const api_params *ap = &x->ap;
+  if (api__samples_core(s, ap, "/samples", &x->o, c))
+    return -1;
   if (s->has_t) {
     if (!(x->times = malloc(s->t.n * sizeof *x->times)))
       return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
@@ -128,7 +81,7 @@ static int samples_to_core(sim_x *x, const api_call *c) {
     return api__fail(c->e, API_P_INVALID_VALUE, "/samples",
                      "the sample window must satisfy t0 <= from <= to <= "
                      "t_end");
-  x->o.n_samples = (size_t)s->n;
+  x->o.n_samples = s->has_n ? (size_t)s->n : 0;
   x->o.sample_from = from;
   x->o.sample_to = to;
   return 0;
@@ -154,7 +107,8 @@ static int to_core(sim_x *x, const api_call *c) {
   x->o.max_events = x->events && lim->max_event_list < lim->max_events
                         ? lim->max_event_list
                         : lim->max_events;
-  x->o.max_samples = lim->max_samples;
+  if (!(x->has_samples && x->samples.has_tolerance))
+    x->o.max_samples = lim->max_samples; /* else the curve's own */
   x->o.max_seconds = lim->max_seconds;
   if (c->srv && c->srv->cancelled) {
     x->o.cancelled = c->srv->cancelled;
@@ -198,6 +152,13 @@ int ep_simulate_run(void *xp, const api_call *c) {
                              "the run has more than %zu events before t_end; "
                              "shorten t_end or use stop_after",
                              lim->max_events);
+  if (rc == SS_ELIMIT_SAMPLES)
+    return api__status_limit(
+        c->e, rc, "max_samples", (double)x->o.max_samples, "/samples/tolerance",
+        "the tolerance %g needs more than %zu samples; give a larger "
+        "tolerance or scale, a shorter window, or a larger max (up to the "
+        "limit of %zu)",
+        x->o.sample_tolerance, x->o.max_samples, lim->max_samples);
   if (rc == SS_ELIMIT_TIME)
     return api__status_limit(
         c->e, rc, "max_seconds", lim->max_seconds, "/t_end",
@@ -247,7 +208,8 @@ int ep_simulate_encode(const void *xp, const api_call *c, api_response *out) {
              api__lazy(c, r->n_events, event_item, r, &x->ap, 0,
                        r->n_events * sizeof *r->events));
   if (x->has_samples)
-    api__set(o, "samples", api__samples(r, &x->ap, c));
+    api__set(o, "samples",
+             api__samples(r, &x->ap, api__samples_columns(&x->samples), c));
   return api__answer(o, &SPEC, x, &x->ap, c, out);
 }
 
@@ -255,7 +217,7 @@ void ep_simulate_release(void *xp) {
   sim_x *x = xp;
   if (!x)
     return;
-  free(x->samples.t.v);
+  api__samples_release(&x->samples);
   free(x->times);
   ss_sim_result_free(&x->r);
   free(x);

@@ -39,7 +39,7 @@ cp "$src/tests/example/example.c" "$tmp/consumer/"
 cat >"$tmp/consumer/CMakeLists.txt" <<'CM'
 cmake_minimum_required(VERSION 3.16)
 project(consumer C)
-find_package(stickslip 0.2 REQUIRED)
+find_package(stickslip 0.3 REQUIRED)
 add_executable(example example.c)
 target_link_libraries(example PRIVATE stickslip::stickslip)
 CM
