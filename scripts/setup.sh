@@ -7,7 +7,9 @@
 #                     the unit, nginx in front of replicas, python3 and its
 #                     jsonschema for the examples' and the contract's checks,
 #                     node and npm for the contract's linter (the pinned
-#                     @redocly/cli of api/lint, from the npm registry);
+#                     @redocly/cli of api/lint) and the explorer's browser
+#                     test (chromium, driven by the pinned puppeteer-core of
+#                     tests/browser; both from the npm registry);
 #                     without them those tests are skipped, so as another
 #                     user their absence is only said
 set -euo pipefail
@@ -15,7 +17,7 @@ pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-d
   zlib1g-dev)
 extras=()
 if [ "${1:-}" = --test ]; then
-  extras=(prometheus nginx python3 python3-jsonschema systemd)
+  extras=(prometheus nginx python3 python3-jsonschema systemd chromium)
   command -v npm >/dev/null || extras+=(nodejs npm)
 fi
 cd "$(dirname "$0")/.."
@@ -28,6 +30,11 @@ lint_tools() {
   if [ "${1:-}" = --test ] && command -v npm >/dev/null &&
     [ ! -x api/lint/node_modules/.bin/redocly ]; then
     (cd api/lint && npm ci --no-audit --no-fund --ignore-scripts --loglevel=error)
+  fi
+  if [ "${1:-}" = --test ] && command -v npm >/dev/null &&
+    [ ! -d tests/browser/node_modules/puppeteer-core ]; then
+    (cd tests/browser && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund \
+      --ignore-scripts --loglevel=error)
   fi
 }
 if [ ${#missing[@]} -eq 0 ]; then

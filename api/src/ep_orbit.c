@@ -140,6 +140,12 @@ static int sample_paths(orbit_x *x, const api_call *c) {
     so.sample_to = o->period;
     if (api__samples_core(s, &x->ap, "/samples", &so, c))
       return -1;
+    if (s->has_tolerance) {
+      /* a curve ends where the period does, at its last event (found to
+       * rounding either side of the period): its stick -> slip point */
+      so.stop_after = (size_t)o->n_phases;
+      so.t_end = so.sample_to = o->period * (1 + 1e-9) + 1e-12;
+    }
     so.max_events = 64 * (size_t)o->n_phases;
     so.max_seconds = c->lim->max_seconds;
     so.cancelled = x->opts.cancelled;
