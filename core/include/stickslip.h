@@ -458,13 +458,15 @@ typedef struct ss_sim_opts {
    * and the polyline splits by mode there).  A stick's straight x2 and x2'
    * cost its two ends.
    *
-   * The bound: on a step h from local time u, each coordinate differs from
-   * the chord (at the same time) by at most h^2/8 max|c''|, and
-   * max|c''| <= |c''(u + h/2)| + (h/2) sum_k R_k w_k^3 from the closed
-   * form's terms (amplitude R_k, frequency w_k); the scaled Euclidean norm of
-   * these must be <= sample_tolerance.  The distance to the polyline is at
-   * most the distance to the chord's point at the same time, so the bound
-   * holds for it (up to rounding, about 1e-15 of the coordinates).
+   * The bound, in the scaled coordinates: on a step h from local time u the
+   * curve differs from the chord (at the same time) by at most
+   * h^2/8 max|c''|, and max|c''| <= max_j |c''(u + j h/4)| + (h/8)|b3|,
+   * b3 = sum_k R_k w_k^3 from the closed form's terms (amplitude R_k,
+   * frequency w_k); where the curve moves forward along the chord all the
+   * way (the same kind of bound on c'), only the part of c'' across the
+   * chord counts.  The distance to the polyline is at most either, so the
+   * smaller must be <= sample_tolerance (up to rounding, about 1e-15 of the
+   * coordinates).
    * The count is limited by max_samples (SS_ELIMIT_SAMPLES beyond it).
    */
   double sample_tolerance;

@@ -329,45 +329,57 @@ static int push_sample(sampler *sp, const ss_sim *s, double t) {
 
 /* The bound of ss_sim_opts.sample_tolerance on the chord over local times
  * [u, u + h] of the coordinates g (b3: their third-derivative bounds), in
- * scaled coordinates c:
- * - at equal times: |c(t) - chord(t)| <= h^2/8 max|c''|, with
- *   max|c''| <= |c''(mid)| + (h/2)|b3|;
+ * scaled coordinates c, from c', c'' at the five points u + j h/4 (every
+ * time of the step is within h/8 of one, so max|c''| <= max_j |c''_j| +
+ * (h/8)|b3|, and likewise for c' with max|c''|):
+ * - at equal times: |c(t) - chord(t)| <= h^2/8 max|c''|;
  * - across: when the projection of c(t) on the chord's direction e moves
- *   forward all along (c'.e >= c'(mid).e - (h/2) max|c''| > 0), c(t) stays
- *   over the segment and its distance to it is that of f = P(c - c(u)), P
- *   the projection across e: f vanishes at both ends, so
- *   |f| <= h^2/8 max|P c''| <= h^2/8 (|P c''(mid)| + (h/2)|b3|).
+ *   forward all along (min_j c'_j.e - (h/8) max|c''| > 0), c(t) stays over
+ *   the segment and its distance to it is that of f = P(c - c(u)), P the
+ *   projection across e: f vanishes at both ends, so
+ *   |f| <= h^2/8 max|P c''| <= h^2/8 (max_j |P c''_j| + (h/8)|b3|).
  * The smaller of the two holds. */
 static double chord_bound(const sampler *sp, const ss_trig g[4],
                           const double b3[4], double u, double h) {
-  double c0[4], c1[4], v[4], acc[4], B = 0, A = 0, L = 0;
+  double c[5][4], v[5][4], a[5][4], B = 0, L = 0;
   for (int i = 0; i < 4; i++) {
-    double s = sp->inv_scale[i], e0[1], e1[1], dm[3];
-    c0[i] = c1[i] = v[i] = acc[i] = 0;
-    if (s == 0)
-      continue;
-    ss_trig_eval(&g[i], u, 0, e0);
-    ss_trig_eval(&g[i], u + h, 0, e1);
-    ss_trig_eval(&g[i], u + 0.5 * h, 2, dm);
-    c0[i] = s * e0[0];
-    c1[i] = s * e1[0];
-    v[i] = s * dm[1];
-    acc[i] = s * dm[2];
+    double s = sp->inv_scale[i];
+    for (int j = 0; j < 5; j++) {
+      double d[3] = {0, 0, 0};
+      if (s != 0)
+        ss_trig_eval(&g[i], u + 0.25 * j * h, 2, d);
+      c[j][i] = s * d[0];
+      v[j][i] = s * d[1];
+      a[j][i] = s * d[2];
+    }
     B += (s * b3[i]) * (s * b3[i]);
-    A += acc[i] * acc[i];
-    L += (c1[i] - c0[i]) * (c1[i] - c0[i]);
+    L += (c[4][i] - c[0][i]) * (c[4][i] - c[0][i]);
   }
-  B = 0.5 * h * sqrt(B);
-  double amax = sqrt(A) + B, best = 0.125 * h * h * amax;
+  B = 0.125 * h * sqrt(B);
+  double amax = 0;
+  for (int j = 0; j < 5; j++) {
+    double n2 = 0;
+    for (int i = 0; i < 4; i++)
+      n2 += a[j][i] * a[j][i];
+    amax = fmax(amax, sqrt(n2));
+  }
+  amax += B;
+  double best = 0.125 * h * h * amax;
   if (L > 0) {
     L = sqrt(L);
-    double ve = 0, ae = 0;
-    for (int i = 0; i < 4; i++) {
-      ve += v[i] * (c1[i] - c0[i]) / L;
-      ae += acc[i] * (c1[i] - c0[i]) / L;
+    double vmin = INFINITY, across = 0;
+    for (int j = 0; j < 5; j++) {
+      double ve = 0, ae = 0, n2 = 0;
+      for (int i = 0; i < 4; i++) {
+        double e = (c[4][i] - c[0][i]) / L;
+        ve += v[j][i] * e;
+        ae += a[j][i] * e;
+        n2 += a[j][i] * a[j][i];
+      }
+      vmin = fmin(vmin, ve);
+      across = fmax(across, sqrt(fmax(0, n2 - ae * ae)));
     }
-    double across = sqrt(fmax(0, A - ae * ae));
-    if (ve - 0.5 * h * amax > 0)
+    if (vmin - 0.125 * h * amax > 0)
       best = fmin(best, 0.125 * h * h * (across + B));
   }
   return best;
