@@ -15,7 +15,9 @@ if ! command -v node >/dev/null || [ ! -x "${CHROMIUM:-/usr/bin/chromium}" ] ||
 fi
 mkdir -p "$out"
 log=$(mktemp)
-"$bin" --port 0 --quiet 2>"$log" &
+# a compute limit that a daemon built with the sanitizers meets for the
+# page's map (the default 10 s is for the optimised build)
+"$bin" --port 0 --quiet --max-seconds 120 2>"$log" &
 pid=$!
 trap 'kill $pid 2>/dev/null; wait $pid 2>/dev/null; rm -f "$log"' EXIT
 for _ in $(seq 100); do

@@ -111,24 +111,32 @@ try {
 
   // the family of the selected orbit, down in ur to its grazing
   await page.click("#continue-form button");
-  await page.waitForFunction(() => document.querySelectorAll("#family line.branch").length > 0,
-                             { timeout: 60000 });
+  await page.waitForFunction(
+    () => document.querySelectorAll("#family line.branch").length > 0 ||
+          !document.getElementById("error").hidden, { timeout: 120000 });
   const specials = await page.$$eval("#family circle.special", (cs) => cs.map((c) => c.dataset.type));
   check(specials.includes("grazing"), "the continuation diagram shows its grazing: " + specials);
 
-  // the existence map and the basins of the paper's set
+  // the existence map and the basins of the paper's set (small enough for
+  // a daemon built with the sanitizers); a problem instead is reported
+  const drawnOrError = (sel) => page.waitForFunction(
+    (s) => document.querySelectorAll(s).length > 0 || !document.getElementById("error").hidden,
+    { timeout: 120000 }, sel);
+  await page.$eval("#map-form input[name=n]", (e) => { e.value = "12"; });
   await page.click("#map-form button");
-  await page.waitForFunction(() => document.querySelectorAll("#map rect.cell").length > 0,
-                             { timeout: 60000 });
+  await drawnOrError("#map rect.cell");
+  const shown = async () => page.$eval("#error", (e) => (e.hidden ? "" : e.textContent));
   const cells = await page.$$eval("#map rect.cell", (rs) => ({
     all: rs.length, stable: rs.filter((r) => r.classList.contains("stable")).length }));
-  check(cells.all === 576 && cells.stable > 0,
-        "the existence map: 576 cells, " + cells.stable + " with a stable orbit");
+  check(cells.all === 144 && cells.stable > 0,
+        "the existence map: " + cells.all + " of 144 cells, " + cells.stable +
+        " with a stable orbit " + (await shown()));
+  await page.$eval("#basins-form input[name=n]", (e) => { e.value = "32"; });
   await page.click("#basins-form button");
-  await page.waitForFunction(() => document.querySelectorAll("#basins rect.basin").length > 0,
-                             { timeout: 60000 });
+  await drawnOrError("#basins rect.basin");
   const legend = await page.$$eval("#basins-legend li", (ls) => ls.map((l) => l.textContent));
-  check(document_has(legend, "overshoot"), "the basins name the overshoot orbit: " + legend.join("; "));
+  check(document_has(legend, "overshoot"),
+        "the basins name the overshoot orbit: " + legend.join("; ") + " " + (await shown()));
 
   await page.screenshot({ path: out + "/explorer-families.png", fullPage: true });
 
