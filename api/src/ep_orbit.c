@@ -144,6 +144,8 @@ static int sample_paths(orbit_x *x, const api_call *c) {
       /* a curve ends where the period does, at its last event (found to
        * rounding either side of the period): its stick -> slip point */
       so.stop_after = (size_t)o->n_phases;
+      so.start_in_mode = 1;
+      so.start_mode = o->modes[0];
       so.t_end = so.sample_to = o->period * (1 + 1e-9) + 1e-12;
     }
     so.max_events = 64 * (size_t)o->n_phases;

@@ -475,6 +475,11 @@ typedef struct ss_sim_opts {
   unsigned sample_axes;
   /** Divides each coordinate's difference (x1, x2, x1', x2'; 0: 1). */
   double sample_scale[4];
+  /** Start in start_mode (as ss_sim_new_mode(), the state consistent with
+   *  it) instead of the mode of ss_mode_of_state(): for an orbit from its
+   *  stick -> slip point, which at the threshold may read as a stick. */
+  int start_in_mode;
+  ss_mode start_mode; /**< with start_in_mode */
   /** Limit: more events than this is SS_ELIMIT_EVENTS (0: none). */
   size_t max_events;
   size_t max_samples; /**< limit on samples (0: none) */

@@ -541,7 +541,9 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
     return ss__fail(d, SS_EINVAL, "", 0, "missing argument");
   if ((rc = check_opts(o, &ns, d)))
     return rc;
-  if ((rc = ss__sim_init(&s, m, o->t0, x0, d)))
+  if ((rc = o->start_in_mode
+                ? ss__sim_init_mode(&s, m, o->t0, x0, o->start_mode, d)
+                : ss__sim_init(&s, m, o->t0, x0, d)))
     return rc;
   if (ns) {
     r->st = malloc(ns * sizeof *r->st);

@@ -1935,6 +1935,53 @@ static void test_environment(void) {
   unlink(d.log_path);
 }
 
+/* The samples of orbit 0 of an /orbit answer placed for a curve: one
+ * period from its stick -> slip point to the next, starting in slip, the
+ * modes changing at its three events only, each event sampled on both
+ * sides; the columns asked for and no others. */
+static void check_orbit_curve(const char *body, const char *what) {
+  json_t *o = post("/orbit", body, 200);
+  json_t *orb = json_array_get(json_object_get(o, "orbits"), 0);
+  json_t *s = json_object_get(orb, "samples");
+  json_t *t = json_object_get(s, "t"), *mode = json_object_get(s, "mode");
+  size_t n = json_array_size(t);
+  double period = json_number_value(json_object_get(orb, "period"));
+  ASSERT_TRUE(n >= 8 && json_array_size(mode) == n);
+  ASSERT_EQ_INT((int)json_object_size(s), 3); /* t, x2, mode */
+  ASSERT_NEAR(json_number_value(json_array_get(t, 0)), 0, 0);
+  ASSERT_NEAR(json_number_value(json_array_get(t, n - 1)), period,
+              1e-9 * period);
+  ASSERT_TRUE(!strcmp(json_string_value(json_array_get(mode, 0)), "slip"));
+  int changes = 0;
+  for (size_t i = 1; i < n; i++)
+    if (strcmp(json_string_value(json_array_get(mode, i)),
+               json_string_value(json_array_get(mode, i - 1)))) {
+      changes++;
+      /* both sides of the event at the same time */
+      ASSERT_NEAR(json_number_value(json_array_get(t, i)),
+                  json_number_value(json_array_get(t, i - 1)), 1e-12 * period);
+    }
+  ASSERT_EQ_INT(changes, 3);
+  printf("curve of the paper's orbit, %s: %zu samples over %.6g\n", what, n,
+         period);
+  json_decref(o);
+}
+
+/* EVIDENCE: README "Samples placed for a curve": an orbit's curve spans
+ * exactly its period, from slip, in the request's units (dimensionless and
+ * physical alike), with only the columns asked for. */
+static void test_orbit_curves(void) {
+  check_orbit_curve("{" PAPER ",\"kind\":\"overshoot\",\"samples\":{"
+                    "\"tolerance\":1e-3,\"fields\":[\"t\",\"x2\",\"mode\"]}}",
+                    "dimensionless");
+  check_orbit_curve(
+      "{\"physical\":{\"m1\":2.5,\"m2\":0.625,\"k1\":8,\"k2\":2,\"Fs\":"
+      "0.724,\"Fr\":6.178,\"v0\":2},\"kind\":\"overshoot\",\"samples\":{"
+      "\"tolerance\":1e-3,\"scale\":{\"v1\":2,\"v2\":2},\"fields\":[\"t\","
+      "\"x2\",\"mode\"]}}",
+      "physical");
+}
+
 /* Whether the raw response @a raw has the header line "name: value". */
 static int has_header_line(const char *raw, const char *name,
                            const char *value) {
@@ -2169,6 +2216,7 @@ int main(int argc, char **argv) {
     test_operations(&d);
     test_gzip();
     test_explorer_files();
+    test_orbit_curves();
     test_bad_input();
     test_framing();
     ASSERT_EQ_INT(daemon_stop(&d), 0);
