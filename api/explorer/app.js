@@ -357,20 +357,28 @@ async function simulateFrom(evt, which) {
   if (which === 2) { x[1] = a; x[3] = b; } else { x[0] = a; x[2] = b; }
   const { r1, r2 } = state.frames;
   clearError();
+  for (const f of [r1, r2])
+    for (const old of f.layer.querySelectorAll(".simulated"))
+      old.remove();
+  /* three periods in six pieces, each drawn as it arrives and the next
+   * started from its final state */
+  const pieces = 6, span = 3 * o.period / pieces;
+  let from = x, points = 0;
   try {
-    const ans = await post("/simulate", Object.assign({}, state.params, {
-      initial: x, t_end: 3 * o.period, events: false,
-      samples: { tolerance: 0.5, scale: { x1: r1.sx, v1: r1.sy, x2: r2.sx, v2: r2.sy },
-                 fields: ["x1", "x2", "v1", "v2", "mode"] },
-    }));
-    const s = ans.samples;
-    for (const f of [r1, r2])
-      for (const old of f.layer.querySelectorAll(".simulated"))
-        old.remove();
-    drawModes(r2, s.x2, s.v2, s.mode, "#555", "simulated");
-    drawModes(r1, s.x1, s.v1, s.mode, "#555", "simulated");
-    status("simulated from (" + x.map((v) => v.toPrecision(4)).join(", ") + "): " +
-           s.x1.length + " points over 3 periods");
+    for (let k = 0; k < pieces; k++) {
+      const ans = await post("/simulate", Object.assign({}, state.params, {
+        initial: from, t_end: span, events: false,
+        samples: { tolerance: 0.5, scale: { x1: r1.sx, v1: r1.sy, x2: r2.sx, v2: r2.sy },
+                   fields: ["x1", "x2", "v1", "v2", "mode"] },
+      }));
+      const s = ans.samples;
+      drawModes(r2, s.x2, s.v2, s.mode, "#555", "simulated");
+      drawModes(r1, s.x1, s.v1, s.mode, "#555", "simulated");
+      points += s.x1.length;
+      from = ans.final.x;
+      status("simulating from (" + x.map((v) => v.toPrecision(4)).join(", ") + "): " +
+             points + " points, " + (k + 1) + " of " + pieces + " pieces");
+    }
   } catch (e) {
     showError(e);
   }

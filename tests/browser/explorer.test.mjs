@@ -105,9 +105,12 @@ try {
   // a click in the (x2, x2') portrait simulates from there
   const box = await (await page.$("#portrait2")).boundingBox();
   await page.mouse.click(box.x + box.width * 0.6, box.y + box.height * 0.5);
-  await page.waitForFunction(() => document.querySelectorAll("#portrait2 polyline.simulated").length > 0,
-                             { timeout: 20000 });
-  check(true, "a click simulates from the clicked state");
+  await page.waitForFunction(
+    () => /6 of 6 pieces/.test(document.getElementById("status").textContent) ||
+          !document.getElementById("error").hidden, { timeout: 60000 });
+  const sims = await page.$$eval("#portrait2 polyline.simulated", (ls) => ls.length);
+  check(sims >= 6, "a click simulates three periods from the clicked state, drawn piece by " +
+        "piece: " + sims + " segments");
 
   // the family of the selected orbit, down in ur to its grazing
   await page.click("#continue-form button");
