@@ -131,6 +131,7 @@ static int sample_paths(orbit_x *x, const api_call *c) {
     return 0;
   if (!(x->paths = calloc((size_t)x->n, sizeof *x->paths)))
     return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  size_t used = 0; /* curves' samples so far: all of them within the limit */
   for (int i = 0; i < x->n; i++) {
     const ss_orbit *o = &x->orbits[i];
     ss_sim_opts so;
@@ -147,6 +148,9 @@ static int sample_paths(orbit_x *x, const api_call *c) {
       so.start_in_mode = 1;
       so.start_mode = o->modes[0];
       so.t_end = so.sample_to = o->period * (1 + 1e-9) + 1e-12;
+      size_t left = c->lim->max_samples - used;
+      if (so.max_samples > left) /* the curves together */
+        so.max_samples = left;
     }
     so.max_events = 64 * (size_t)o->n_phases;
     so.max_seconds = c->lim->max_seconds;
@@ -157,9 +161,10 @@ static int sample_paths(orbit_x *x, const api_call *c) {
       return api__status_limit(
           c->e, rc, "max_samples", (double)so.max_samples, "/samples/tolerance",
           "the tolerance %g needs more than %zu samples over the period of "
-          "orbit %d; give a larger tolerance or scale, or a larger max (up "
-          "to the limit of %zu)",
+          "orbit %d (the %zu samples of all the orbits' curves are within "
+          "--max-samples); give a larger tolerance or scale, or a larger max",
           so.sample_tolerance, so.max_samples, i, c->lim->max_samples);
+    used += x->paths[i].n_samples;
     if (rc != SS_OK)
       ss_sim_result_free(&x->paths[i]);
   }
