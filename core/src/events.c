@@ -23,6 +23,7 @@
 #include <string.h>
 
 #include "internal.h"
+#include "sincos.h"
 
 /* A zero within tol = TOL_ULPS * DBL_EPSILON * scale is indistinguishable
  * from rounding noise in the evaluation of g (a sum of at most 2 + 2n terms
@@ -37,7 +38,9 @@ void ss_trig_eval(const ss_trig *g, double t, int order, double *out) {
    * cost less than the tests); only the ones asked for are stored. */
   double v0 = g->c0 + g->c1 * t, v1 = g->c1, v2 = 0, v3 = 0;
   for (int k = 0; k < g->n; k++) {
-    double w = g->w[k], c = cos(w * t), s = sin(w * t);
+    double w = g->w[k], c = 1, s = 0;
+    if (t != 0) /* searches start at the anchor, where no sine is needed */
+      ss__sincos(w * t, &s, &c);
     double A = g->a[k] * c + g->b[k] * s, B = g->b[k] * c - g->a[k] * s;
     double w2 = w * w;
     v0 += A;
@@ -90,24 +93,26 @@ static double cubic_step(double g0, double g1, double g2, double M3,
                          double hq) {
   if (M3 <= 0)
     return 0;
+  /* the usual answer, when even twice the (Q) step is not certified */
+  double h2 = 2 * hq;
+  if (!(g0 + h2 * (g1 + h2 * (g2 / 2 + h2 * M3 / 6)) < 0))
+    return 0;
+  /* p'(s) = g1 + g2 s + M3 s^2/2 = 0: the local maximum of p is the smaller
+   * root, where p'' = g2 + M3 s < 0; smax <= 0 when there is none ahead. */
+  double smax = 0, pm = -1, D = g2 * g2 - 2 * M3 * g1;
+  if (D > 0) {
+    smax = (-g2 - sqrt(D)) / M3;
+    if (smax > 0)
+      pm = g0 + smax * (g1 + smax * (g2 / 2 + smax * M3 / 6));
+  }
   double best = 0;
   for (double f = 2; f <= 64; f *= 2) {
     double h = f * hq;
     double ph = g0 + h * (g1 + h * (g2 / 2 + h * M3 / 6));
     if (!(ph < 0))
       break;
-    /* p'(s) = g1 + g2 s + M3 s^2/2 = 0: the local maximum is the smaller
-     * root, where p'' = g2 + M3 s < 0. */
-    double D = g2 * g2 - 2 * M3 * g1;
-    if (D > 0) {
-      double r = sqrt(D);
-      double smax = (-g2 - r) / M3; /* maximum of p: the smaller root */
-      if (smax > 0 && smax < h) {
-        double pm = g0 + smax * (g1 + smax * (g2 / 2 + smax * M3 / 6));
-        if (!(pm < 0))
-          break;
-      }
-    }
+    if (smax > 0 && smax < h && !(pm < 0))
+      break;
     best = h;
   }
   return best;
@@ -241,9 +246,52 @@ static int classify(const ss_trig *g, const bounds *b, double a, double tol,
   return SS_OK;
 }
 
-int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
+/* The largest value over [a, b] of min(F, B) for the convex bounds
+ *   F(t) = fa + f1 (t - a) + M (t - a)^2 / 2   (forward from a),
+ *   B(t) = gb - g1 (b - t) + M (b - t)^2 / 2   (backward from b),
+ * both bounds on one function, so min(F, B) is one too.  F - B is linear,
+ * so it is the larger of the ends and the value where F = B. */
+static double piece_max(double fa, double f1, double gb, double g1, double M,
+                        double a, double b) {
+  double L = b - a;
+  double Fb = fa + L * (f1 + 0.5 * M * L), Ba = gb - L * (g1 - 0.5 * M * L);
+  double m = fmax(fmin(fa, Ba), fmin(Fb, gb));
+  /* F - B = c + e s, s = t - a */
+  double c = fa - gb + g1 * L - 0.5 * M * L * L, e = f1 - g1 + M * L;
+  if (e != 0) {
+    double sx = -c / e;
+    if (sx > 0 && sx < L)
+      m = fmax(m, fa + sx * (f1 + 0.5 * M * sx));
+  }
+  return m;
+}
+
+/* Finish a record: g, its bounds, the bracket and the zero, and the room
+ * each piece between recorded points leaves (the first piece is judged
+ * against the next function's own start). */
+static void record(ss__root_cert *c, const ss_trig *g, const bounds *b,
+                   double tol, double hi, double root) {
+  c->g = *g;
+  c->M1 = b->M1;
+  c->M2 = b->M2;
+  c->tol = tol;
+  c->hi = hi;
+  c->root = root;
+  for (int i = 1; i + 1 < c->n; i++)
+    c->mu[i] = piece_max(c->gu[i], c->g1[i], c->gu[i + 1], c->g1[i + 1], b->M2,
+                         c->a[i], c->a[i + 1]);
+  c->valid = 1;
+}
+
+/* The search of ss_trig_first_root; with rec, the certificate of a search
+ * that ends in a simple zero by the bracket below is recorded into it
+ * (every other end leaves it invalid). */
+static int first_root(const ss_trig *g, double t0, double tmax, double *t,
+                      ss__root_cert *rec) {
   bounds b;
   double v[4], a = t0;
+  if (rec)
+    rec->valid = rec->n = 0;
   if (!g || !t || g->n < 0 || g->n > SS_TRIG_MAX || !isfinite(t0) ||
       !(tmax > t0))
     return SS_EINVAL;
@@ -279,6 +327,16 @@ int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
     fresh = 0;
     if (v[0] >= -tol)
       return classify(g, &b, a, tol, t);
+    if (rec) {
+      if (rec->n == SS__CERT_MAX)
+        rec = NULL; /* too many steps to keep: no record */
+      else {
+        rec->a[rec->n] = a;
+        rec->gu[rec->n] = v[0] + tol;
+        rec->g1[rec->n] = v[1];
+        rec->n++;
+      }
+    }
     /* Near a simple root: if the Newton step d = -g/g' is short enough that
      * g' stays positive over [a, a + 2d] (g' >= g'(a) - M2 s) and the bound
      * certifies g(a + 2d) >= |g(a)|/2 > tol, the first root is the only one
@@ -292,6 +350,8 @@ int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
         if (!(th > a && th < a + 2 * d))
           th = a + d;
         *t = polish(g, &b, a, a + 2 * d, th);
+        if (rec)
+          record(rec, g, &b, tol, a + 2 * d, *t);
         return SS_OK;
       }
     }
@@ -308,6 +368,133 @@ int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
   }
   *t = a;
   return SS_ENOCONV;
+}
+
+/* The search answered from the record c, if c covers g (see ss__root_cert):
+ * SS_OK with the zero in *t, or -1 when it does not. */
+/* The distance of g from the record's function: D0, D1 of
+ * ss__root_cert's bound |Delta(t)| <= D0 + D1 t, and Dp, that of Delta';
+ * D0 is INFINITY for a record that cannot cover g (another form). */
+typedef struct distance {
+  double D0, D1, Dp;
+} distance;
+
+static distance distance_to(const ss_trig *g, const bounds *b,
+                            const ss__root_cert *c) {
+  const ss_trig *r = &c->g;
+  distance d = {INFINITY, INFINITY, INFINITY};
+  if (!c->valid || g->n != r->n)
+    return d;
+  double D0 = fabs(g->c0 - r->c0), D1 = fabs(g->c1 - r->c1), Dp = D1;
+  double size = fabs(g->c0) + b->amp;
+  for (int k = 0; k < g->n; k++) {
+    if (g->w[k] != r->w[k])
+      return d;
+    double e = fabs(g->a[k] - r->a[k]) + fabs(g->b[k] - r->b[k]);
+    D0 += e;
+    Dp += g->w[k] * e;
+    size += fabs(g->a[k]) + fabs(g->b[k]);
+  }
+  /* the differences' own rounding */
+  d.D0 = D0 + 4 * DBL_EPSILON * size;
+  d.D1 = D1 + 4 * DBL_EPSILON * fabs(g->c1);
+  d.Dp = Dp;
+  return d;
+}
+
+static int from_record(const ss_trig *g, const bounds *b, double tmax,
+                       ss__root_cert *c, distance dist, double *t) {
+  const ss_trig *r = &c->g;
+  double D0 = dist.D0, D1 = dist.D1, Dp = dist.Dp;
+  if (!isfinite(D0))
+    return -1;
+  int n = c->n;
+  double lo = c->a[n - 1], hi = c->hi;
+  if (!(hi <= tmax))
+    return -1;
+  /* g's own start: at 0 (free of sines), negative or leaving zero downward
+   * at once (the first case of escape()); F0 bounds g from 0 on. */
+  double v[4], tol = tol_at(g, b, 0), s = 0;
+  ss_trig_eval(g, 0, 3, v);
+  if (v[0] > tol)
+    return -1;
+  if (v[0] >= -tol) {
+    if (departure(b, tol, v) > 0 || !(v[1] < 0 && b->M2 > 0))
+      return -1;
+    s = -v[1] / b->M2;
+    if (!(v[0] + v[1] * s + b->M2 * s * s / 2 < -tol))
+      return -1;
+  }
+  /* [s, a_1] (or [s, lo] with no point between): F0, g's own bound from
+   * 0 (with M >= its M2), and there B_1 + D as well, the record's bound
+   * backward from a_1 */
+  double M = fmax(b->M2, c->M2);
+  double fs = (v[0] + tol) + s * (v[1] + 0.5 * M * s), f1 = v[1] + M * s;
+  double e1 = n > 1 ? c->a[1] : lo, m0;
+  if (!(s <= e1))
+    return -1;
+  if (n > 1)
+    m0 = piece_max(fs, f1, c->gu[1] + D0 + D1 * e1, c->g1[1], M, s, e1);
+  else /* F0 is convex: its largest value is at an end */
+    m0 = fmax(fs, fs + (e1 - s) * (f1 + 0.5 * M * (e1 - s)));
+  /* g below -2 tol, not just below 0, so that no evaluation of it there
+   * could come within tol of zero, where the full search would stop to
+   * judge a touch: the answer is the full search's, not only a true one */
+  double tz = 2 * tol_at(g, b, hi);
+  if (!(m0 < -tz))
+    return -1;
+  for (int i = 1; i + 1 < n; i++)
+    if (!(c->mu[i] + D0 + D1 * c->a[i + 1] < -tz))
+      return -1;
+  /* the bracket (g < 0 at lo, the end of the pieces above): g > 0 at hi,
+   * and rising all the way there, so that its zero is the only one.  (The
+   * bracket's width, under g'(lo) / (2 M2), makes the rise follow from the
+   * value at hi in every case the tests could build; it is kept because
+   * the proof needs it.) */
+  double L = hi - lo, gu = c->gu[n - 1], g1 = c->g1[n - 1];
+  double slope_noise = TOL_ULPS * DBL_EPSILON * (fabs(r->c1) + c->M1);
+  double g1lo = g1 - slope_noise; /* g'(lo) is at least this */
+  if (!((gu - 2 * c->tol) + L * (g1lo - 0.5 * c->M2 * L) - (D0 + D1 * hi) >
+        0) ||
+      !(g1lo - c->M2 * L - Dp > 0))
+    return -1;
+  double th = c->root > lo && c->root < hi ? c->root : 0.5 * (lo + hi);
+  *t = polish(g, b, lo, hi, th);
+  c->root = *t;
+  c->hits++;
+  return SS_OK;
+}
+
+int ss_trig_first_root(const ss_trig *g, double t0, double tmax, double *t) {
+  return first_root(g, t0, tmax, t, NULL);
+}
+
+int ss__trig_first_root_cert(const ss_trig *g, double tmax, ss__root_cert *c,
+                             int n, double *t) {
+  if (!c || n < 1 || !g || !t || g->n < 0 || g->n > SS_TRIG_MAX || !(tmax > 0))
+    return first_root(g, 0, tmax, t, NULL);
+  bounds b;
+  get_bounds(g, &b);
+  /* the nearest record answers, if any can; a search in full replaces an
+   * empty record, else the farthest */
+  int near = -1, far = 0;
+  distance dn = {INFINITY, 0, 0};
+  double dfar = -1;
+  for (int i = 0; i < n; i++) {
+    distance d = distance_to(g, &b, &c[i]);
+    if (d.D0 < dn.D0) {
+      dn = d;
+      near = i;
+    }
+    double key = c[i].valid ? d.D0 : INFINITY;
+    if (key > dfar) {
+      dfar = key;
+      far = i;
+    }
+  }
+  if (near >= 0 && from_record(g, &b, tmax, &c[near], dn, t) == SS_OK)
+    return SS_OK;
+  return first_root(g, 0, tmax, t, &c[far]);
 }
 
 /* Internal use: the tolerance and departure rule, so that the mode rule at a

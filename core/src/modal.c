@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "internal.h"
+#include "sincos.h"
 
 const char *ss_mode_name(ss_mode m) {
   switch (m) {
@@ -134,7 +135,8 @@ static void free_flow(const ss_model *m, double sgn, double t,
   zb[3] = x0[3];
   ss__modal(m, zb, q, qd);
   for (int k = 0; k < 2; k++) {
-    double w = m->w[k], c = cos(w * t), s = sin(w * t);
+    double w = m->w[k], c, s;
+    ss__sincos(w * t, &s, &c);
     qt[k] = q[k] * c + qd[k] / w * s;
     qdt[k] = qd[k] * c - q[k] * w * s;
   }
@@ -148,7 +150,8 @@ static void stick_flow(const ss_model *m, double t, const double x0[4],
                        double x[4]) {
   double chi = m->p.chi, V = m->p.V;
   double a = x0[0] - chi * x0[1], b = x0[2] - chi * V;
-  double c = cos(t), s = sin(t);
+  double c, s;
+  ss__sincos(t, &s, &c);
   double x2 = x0[1] + V * t;
   x[0] = chi * x2 + a * c + b * s;
   x[1] = x2;
@@ -236,7 +239,8 @@ void ss_transition(const ss_model *m, ss_mode mode, double t, double A[16],
                    double c[4], double dA[16], double dc[4]) {
   if (mode == SS_MODE_STICK) {
     /* Gamma(t) of (2.6), with z2' = V carried as the fourth coordinate. */
-    double chi = m->p.chi, co = cos(t), si = sin(t);
+    double chi = m->p.chi, co, si;
+    ss__sincos(t, &si, &co);
     /* clang-format off */
     if (A) {
       double G[16] = {co,  chi * (1 - co), si, chi * (t - si),
@@ -265,7 +269,8 @@ void ss_transition(const ss_model *m, ss_mode mode, double t, double A[16],
   double H1[2][2], H2[2][2], H3[2][2], KH1[2][2];
   double Hloc[16], dHloc[16];
   for (int k = 0; k < 2; k++) {
-    double w = m->w[k], co = cos(w * t), si = sin(w * t);
+    double w = m->w[k], co, si;
+    ss__sincos(w * t, &si, &co);
     vc[k] = co;
     vs[k] = si / w;
     vws[k] = -w * si;

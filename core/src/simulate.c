@@ -10,6 +10,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include <float.h>
+#include <stddef.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,7 +46,11 @@ int ss__sim_init_mode(ss_sim *s, const ss_model *m, double t0,
     return ss__fail(d, SS_EINVAL, "mode", x0[3],
                     "x2' = %.17g is inconsistent with mode %s", x0[3],
                     ss_mode_name(mode));
-  memset(s, 0, sizeof *s);
+  /* all but the certificates, of which only the flags need clearing */
+  memset(s, 0, offsetof(ss_sim, cert));
+  for (int i = 0; i < 4; i++)
+    for (int j = 0; j < SS__CERT_SLOTS; j++)
+      s->cert[i][j].valid = 0;
   s->m = m;
   s->mode = mode;
   s->t_hi = t0;
@@ -115,7 +120,7 @@ static int sim_find(ss_sim *s, double H) {
   }
   if (s->mode != SS_MODE_STICK) {
     ss__switching(s->m, s->mode, 0, s->x, &g);
-    rc = ss_trig_first_root(&g, 0, H, &t);
+    rc = ss__trig_first_root_cert(&g, H, s->cert[s->mode], SS__CERT_SLOTS, &t);
     /* x2' beyond V at the anchor contradicts the mode: the state is bad */
     if (rc == SS_ABOVE)
       rc = SS_EINVAL;
@@ -137,7 +142,7 @@ static int sim_find(ss_sim *s, double H) {
   double t_up, t_lo;
   int rc_lo;
   ss__switching(s->m, SS_MODE_STICK, 1, s->x, &g);
-  rc = ss_trig_first_root(&g, 0, H, &t_up);
+  rc = ss__trig_first_root_cert(&g, H, s->cert[2], SS__CERT_SLOTS, &t_up);
   /* a stick force already beyond +ur: the state is not a stick */
   if (rc == SS_ABOVE)
     rc = SS_EINVAL;
@@ -146,8 +151,9 @@ static int sim_find(ss_sim *s, double H) {
     return rc;
   }
   ss__switching(s->m, SS_MODE_STICK, -1, s->x, &g);
-  rc_lo = ss_trig_first_root(&g, 0, rc == SS_HORIZON ? H : fmax(t_up, 1e-300),
-                             &t_lo);
+  rc_lo =
+      ss__trig_first_root_cert(&g, rc == SS_HORIZON ? H : fmax(t_up, 1e-300),
+                               s->cert[3], SS__CERT_SLOTS, &t_lo);
   /* SS_ABOVE: the force starts below -ur beyond the tolerance while the
    * search for +ur decided the state is a stick; -ur is then not the next
    * event, as if it were never reached. */
@@ -195,6 +201,22 @@ static ss_mode mode_after_slip(const ss_model *m, ss_mode from,
   return to == from ? SS_MODE_STICK : to;
 }
 
+/* The absolute time of local time tau, (t_hi + t_lo) + tau, renormalised
+ * into *hi + *lo as the anchor is at an event. */
+static void abs_time2(const ss_sim *s, double tau, double *hi, double *lo) {
+  double h, err;
+  ss__two_sum(s->t_hi, tau, &h, &err);
+  ss__two_sum(h, s->t_lo + err, hi, lo);
+}
+
+/* That time as one double: the event time sim_commit() will record, so
+ * that samples up to an event end exactly where the next phase's begin. */
+static double abs_time(const ss_sim *s, double tau) {
+  double hi, lo;
+  abs_time2(s, tau, &hi, &lo);
+  return hi + lo;
+}
+
 static void sim_commit(ss_sim *s, ss_event *ev) {
   double xe[4], tau = s->t_next;
   ss_mode from = s->mode, to;
@@ -208,11 +230,7 @@ static void sim_commit(ss_sim *s, ss_event *ev) {
              : (s->next_sign > 0 ? SS_MODE_SLIP : SS_MODE_OVERSHOOT);
   else
     to = mode_after_slip(s->m, from, xe);
-  /* absolute time: (t_hi + t_lo) + tau, renormalised */
-  double hi, err, lo;
-  ss__two_sum(s->t_hi, tau, &hi, &err);
-  lo = s->t_lo + err;
-  ss__two_sum(hi, lo, &s->t_hi, &s->t_lo);
+  abs_time2(s, tau, &s->t_hi, &s->t_lo);
   memcpy(s->x, xe, sizeof xe);
   s->mode = to;
   s->have_next = 0;
@@ -587,9 +605,9 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
     /* samples of this phase, strictly before the event (or, placed for a
      * curve, up to it) */
     if (sp.i < sp.n)
-      emit_samples(&sp, &s, s.t_hi + (s.t_lo + tau), 1);
+      emit_samples(&sp, &s, abs_time(&s, tau), 1);
     if (sp.adaptive) {
-      sample_window(&sp, &s, s.t_hi + (s.t_lo + tau));
+      sample_window(&sp, &s, abs_time(&s, tau));
       if ((rc = sampled(&sp, d)))
         goto stopped;
     }
