@@ -388,7 +388,7 @@ static int closed_by_server(int fd, int ms) {
 static const char *LONG_SIM =
     "{" PAPER ",\"initial\":" X0 ",\"t_end\":9e8,\"events\":false}";
 static const char *MEDIUM_SIM =
-    "{" PAPER ",\"initial\":" X0 ",\"t_end\":6e6,\"events\":false}";
+    "{" PAPER ",\"initial\":" X0 ",\"t_end\":1.5e7,\"events\":false}";
 static const char *CHEAP =
     "{" PAPER ",\"phases\":[{\"mode\":\"slip\",\"duration\":4.497497290813434},"
     "{\"mode\":\"overshoot\",\"duration\":2.7226655903272814},{\"mode\":"
