@@ -40,6 +40,7 @@
 #include <string.h>
 
 #include "internal.h"
+#include "sincos.h"
 
 #define SCAN_MAX_DEPTH 3
 #define SCAN_T3_TURN 1.0
@@ -164,7 +165,9 @@ static void eval_sos(const ss_model *m, const slip_map *S, const over_map *O,
     q->Rn[0] = q->Rn[1] = NAN;
     return;
   }
-  closure(m, xd, sn, det, cos(q->t3), sin(q->t3), q);
+  double co, si;
+  ss__sincos(q->t3, &si, &co);
+  closure(m, xd, sn, det, co, si, q);
 }
 
 /* The last two slip and overshoot maps off the grid: Newton's differences
@@ -202,10 +205,13 @@ static const over_map *over_cached(maps *mc, double t) {
 static void eval_at(maps *mc, int n, double t1, double t2, point *q) {
   double sn[2];
   const slip_map *S = slip_cached(mc, t1);
-  if (n == 2)
-    eval_ss(mc->m, S, t2, cos(t2), sin(t2), q, sn);
-  else
+  if (n == 2) {
+    double co, si;
+    ss__sincos(t2, &si, &co);
+    eval_ss(mc->m, S, t2, co, si, q, sn);
+  } else {
     eval_sos(mc->m, S, over_cached(mc, t2), INFINITY, q, sn);
+  }
 }
 
 /* The reduced residual at t, times det (smooth where R has a pole) into
@@ -259,7 +265,9 @@ static double implausible(const scan *sc, const double t[2], double t3,
   double sn[2], s[2], x[4], y[4];
   slip_at(m, t[0], &S);
   if (sc->n == 2) {
-    eval_ss(m, &S, t[1], cos(t[1]), sin(t[1]), &q, sn);
+    double co, si;
+    ss__sincos(t[1], &si, &co);
+    eval_ss(m, &S, t[1], co, si, &q, sn);
   } else {
     over_at(m, t[1], &O);
     eval_sos(m, &S, &O, INFINITY, &q, sn);
