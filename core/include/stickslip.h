@@ -480,6 +480,12 @@ typedef struct ss_sim_opts {
    *  stick -> slip point, which at the threshold may read as a stick. */
   int start_in_mode;
   ss_mode start_mode; /**< with start_in_mode */
+  /** Search every event from scratch.  By default a search whose switching
+   *  function is near one of the last searches' of its mode is answered
+   *  from that search's certificate (the same answer at a fraction of the
+   *  cost, see the README's "What a period costs"); this turns that off,
+   *  for checking and for comparison. */
+  int full_search;
   /** Limit: more events than this is SS_ELIMIT_EVENTS (0: none). */
   size_t max_events;
   size_t max_samples; /**< limit on samples (0: none) */

@@ -272,8 +272,10 @@ static double piece_max(double fa, double f1, double gb, double g1, double M,
 static void record(ss__root_cert *c, const ss_trig *g, const bounds *b,
                    double tol, double hi, double root) {
   c->g = *g;
+  c->amp = b->amp;
   c->M1 = b->M1;
   c->M2 = b->M2;
+  c->M3 = b->M3;
   c->tol = tol;
   c->hi = hi;
   c->root = root;
@@ -374,38 +376,50 @@ static int first_root(const ss_trig *g, double t0, double tmax, double *t,
  * SS_OK with the zero in *t, or -1 when it does not. */
 /* The distance of g from the record's function: D0, D1 of
  * ss__root_cert's bound |Delta(t)| <= D0 + D1 t, and Dp, that of Delta';
- * D0 is INFINITY for a record that cannot cover g (another form). */
+ * D0 is INFINITY for a record that cannot cover g (another form).  With
+ * e_k = |da_k| + |db_k| >= |R_k(g) - R_k(record)|, the record's bounds
+ * plus the sums of e_k w_k^j bound g's, without a square root. */
 typedef struct distance {
   double D0, D1, Dp;
+  bounds b;
 } distance;
 
-static distance distance_to(const ss_trig *g, const bounds *b,
-                            const ss__root_cert *c) {
+static distance distance_to(const ss_trig *g, const ss__root_cert *c) {
   const ss_trig *r = &c->g;
-  distance d = {INFINITY, INFINITY, INFINITY};
+  distance d = {INFINITY, INFINITY, INFINITY, {0, 0, 0, 0}};
   if (!c->valid || g->n != r->n)
     return d;
-  double D0 = fabs(g->c0 - r->c0), D1 = fabs(g->c1 - r->c1), Dp = D1;
-  double size = fabs(g->c0) + b->amp;
+  double D0 = fabs(g->c0 - r->c0), D1 = fabs(g->c1 - r->c1);
+  double E0 = 0, E1 = 0, E2 = 0, E3 = 0, size = fabs(g->c0);
   for (int k = 0; k < g->n; k++) {
-    if (g->w[k] != r->w[k])
+    double w = g->w[k];
+    if (w != r->w[k])
       return d;
     double e = fabs(g->a[k] - r->a[k]) + fabs(g->b[k] - r->b[k]);
-    D0 += e;
-    Dp += g->w[k] * e;
+    E0 += e;
+    E1 += w * e;
+    E2 += w * w * e;
+    E3 += w * w * w * e;
     size += fabs(g->a[k]) + fabs(g->b[k]);
   }
   /* the differences' own rounding */
-  d.D0 = D0 + 4 * DBL_EPSILON * size;
+  d.D0 = D0 + E0 + 4 * DBL_EPSILON * size;
   d.D1 = D1 + 4 * DBL_EPSILON * fabs(g->c1);
-  d.Dp = Dp;
+  d.Dp = D1 + E1;
+  /* the sums' own rounding, relative */
+  double up = 1 + 8 * DBL_EPSILON;
+  d.b.amp = (c->amp + E0) * up;
+  d.b.M1 = (c->M1 + E1) * up;
+  d.b.M2 = (c->M2 + E2) * up;
+  d.b.M3 = (c->M3 + E3) * up;
   return d;
 }
 
-static int from_record(const ss_trig *g, const bounds *b, double tmax,
-                       ss__root_cert *c, distance dist, double *t) {
+static int from_record(const ss_trig *g, double tmax, ss__root_cert *c,
+                       const distance *dist, double *t) {
   const ss_trig *r = &c->g;
-  double D0 = dist.D0, D1 = dist.D1, Dp = dist.Dp;
+  const bounds *b = &dist->b; /* bounds of g, from the record's */
+  double D0 = dist->D0, D1 = dist->D1, Dp = dist->Dp;
   if (!isfinite(D0))
     return -1;
   int n = c->n;
@@ -473,15 +487,13 @@ int ss__trig_first_root_cert(const ss_trig *g, double tmax, ss__root_cert *c,
                              int n, double *t) {
   if (!c || n < 1 || !g || !t || g->n < 0 || g->n > SS_TRIG_MAX || !(tmax > 0))
     return first_root(g, 0, tmax, t, NULL);
-  bounds b;
-  get_bounds(g, &b);
   /* the nearest record answers, if any can; a search in full replaces an
    * empty record, else the farthest */
   int near = -1, far = 0;
-  distance dn = {INFINITY, 0, 0};
+  distance dn = {INFINITY, 0, 0, {0, 0, 0, 0}};
   double dfar = -1;
   for (int i = 0; i < n; i++) {
-    distance d = distance_to(g, &b, &c[i]);
+    distance d = distance_to(g, &c[i]);
     if (d.D0 < dn.D0) {
       dn = d;
       near = i;
@@ -492,7 +504,7 @@ int ss__trig_first_root_cert(const ss_trig *g, double tmax, ss__root_cert *c,
       far = i;
     }
   }
-  if (near >= 0 && from_record(g, &b, tmax, &c[near], dn, t) == SS_OK)
+  if (near >= 0 && from_record(g, tmax, &c[near], &dn, t) == SS_OK)
     return SS_OK;
   return first_root(g, 0, tmax, t, &c[far]);
 }

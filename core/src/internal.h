@@ -101,10 +101,11 @@ int ss__trig_at_zero(const ss_trig *g, double t0, int *dir);
 #define SS__CERT_MAX 12
 typedef struct ss__root_cert {
   int valid;
-  ss_trig g;     /* the function the record certifies */
-  double M1, M2; /* its bounds on |g' - c1| and |g''| */
-  double tol;    /* its evaluation tolerance at the bracket */
-  int n;         /* points a[0] < ... < a[n-1]; a[n-1] starts the bracket */
+  ss_trig g;              /* the function the record certifies */
+  double amp, M1, M2, M3; /* sum R_k, and its bounds on |g' - c1|, |g''|,
+                           * |g'''| (R_k = hypot(a_k, b_k)) */
+  double tol;             /* its evaluation tolerance at the bracket */
+  int n; /* points a[0] < ... < a[n-1]; a[n-1] starts the bracket */
   double a[SS__CERT_MAX];
   double gu[SS__CERT_MAX]; /* upper bounds on g(a_i): value + tolerance */
   double g1[SS__CERT_MAX]; /* g'(a_i) */
@@ -141,6 +142,7 @@ struct ss_sim {
   int next_sign;     /* stick: +1 next event at +ur, -1 at -ur */
   int have_next;
   double next_horizon; /* local horizon the search for t_next used */
+  int full_search;     /* no certificates (ss_sim_opts.full_search) */
   /* the last searches' certificates: slip, overshoot, stick at +ur, -ur */
   ss__root_cert cert[4][SS__CERT_SLOTS];
 };

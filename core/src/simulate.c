@@ -110,6 +110,7 @@ static int sim_find(ss_sim *s, double H) {
   int rc;
   if (s->have_next && (s->next_status != SS_HORIZON || H <= s->next_horizon))
     return SS_OK;
+  int slots = s->full_search ? 0 : SS__CERT_SLOTS;
   s->have_next = 1;
   s->next_horizon = H;
   s->next_sign = 0;
@@ -120,7 +121,7 @@ static int sim_find(ss_sim *s, double H) {
   }
   if (s->mode != SS_MODE_STICK) {
     ss__switching(s->m, s->mode, 0, s->x, &g);
-    rc = ss__trig_first_root_cert(&g, H, s->cert[s->mode], SS__CERT_SLOTS, &t);
+    rc = ss__trig_first_root_cert(&g, H, s->cert[s->mode], slots, &t);
     /* x2' beyond V at the anchor contradicts the mode: the state is bad */
     if (rc == SS_ABOVE)
       rc = SS_EINVAL;
@@ -142,7 +143,7 @@ static int sim_find(ss_sim *s, double H) {
   double t_up, t_lo;
   int rc_lo;
   ss__switching(s->m, SS_MODE_STICK, 1, s->x, &g);
-  rc = ss__trig_first_root_cert(&g, H, s->cert[2], SS__CERT_SLOTS, &t_up);
+  rc = ss__trig_first_root_cert(&g, H, s->cert[2], slots, &t_up);
   /* a stick force already beyond +ur: the state is not a stick */
   if (rc == SS_ABOVE)
     rc = SS_EINVAL;
@@ -151,9 +152,8 @@ static int sim_find(ss_sim *s, double H) {
     return rc;
   }
   ss__switching(s->m, SS_MODE_STICK, -1, s->x, &g);
-  rc_lo =
-      ss__trig_first_root_cert(&g, rc == SS_HORIZON ? H : fmax(t_up, 1e-300),
-                               s->cert[3], SS__CERT_SLOTS, &t_lo);
+  rc_lo = ss__trig_first_root_cert(
+      &g, rc == SS_HORIZON ? H : fmax(t_up, 1e-300), s->cert[3], slots, &t_lo);
   /* SS_ABOVE: the force starts below -ur beyond the tolerance while the
    * search for +ur decided the state is a stick; -ur is then not the next
    * event, as if it were never reached. */
@@ -563,6 +563,7 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
                 ? ss__sim_init_mode(&s, m, o->t0, x0, o->start_mode, d)
                 : ss__sim_init(&s, m, o->t0, x0, d)))
     return rc;
+  s.full_search = o->full_search != 0;
   if (ns) {
     r->st = malloc(ns * sizeof *r->st);
     r->sx = malloc(4 * ns * sizeof *r->sx);
