@@ -134,25 +134,26 @@ static void eval_ss(const ss_model *m, const slip_map *S, double t2, double c2,
 static void eval_sos(const ss_model *m, const slip_map *S, const over_map *O,
                      double tmax, point *q, double sn[2]) {
   double V = m->p.V, k = m->p.ur / m->p.chi;
-  /* the overshoot's end as an affine function of s: GY s + (G y + g) */
-  double GY[4][2], Gy[4];
-  for (int i = 0; i < 4; i++) {
-    GY[i][0] = GY[i][1] = 0;
-    Gy[i] = O->g[i];
-    for (int l = 0; l < 4; l++) {
-      GY[i][0] += O->G[i][l] * S->Y[l][0];
-      GY[i][1] += O->G[i][l] * S->Y[l][1];
-      Gy[i] += O->G[i][l] * S->y[l];
-    }
+  /* the overshoot's end is G (Y s + y) + g; its x2' (row 3 of G) is the
+   * second condition on s, so only that row is needed before s */
+  double b0 = 0, b1 = 0, rb = V - O->g[3];
+  for (int l = 0; l < 4; l++) {
+    b0 += O->G[3][l] * S->Y[l][0];
+    b1 += O->G[3][l] * S->Y[l][1];
+    rb -= O->G[3][l] * S->y[l];
   }
   double a0 = S->Y[3][0], a1 = S->Y[3][1], ra = V - S->y[3];
-  double b0 = GY[3][0], b1 = GY[3][1], rb = V - Gy[3];
   double det = a0 * b1 - a1 * b0;
   sn[0] = ra * b1 - a1 * rb;
   sn[1] = a0 * rb - b0 * ra;
-  double xd[3];
+  /* then the slip's end times det, u = Y sn + y det, and the overshoot's
+   * end times det, G u + g det */
+  double u[4], xd[3];
+  for (int l = 0; l < 4; l++)
+    u[l] = S->Y[l][0] * sn[0] + S->Y[l][1] * sn[1] + S->y[l] * det;
   for (int i = 0; i < 3; i++)
-    xd[i] = GY[i][0] * sn[0] + GY[i][1] * sn[1] + Gy[i] * det;
+    xd[i] = O->G[i][0] * u[0] + O->G[i][1] * u[1] + O->G[i][2] * u[2] +
+            O->G[i][3] * u[3] + O->g[i] * det;
   q->det = det;
   q->t3 = (sn[0] + k * det - xd[1]) / (V * det);
   if (!isfinite(q->t3)) {
@@ -236,8 +237,11 @@ typedef struct scan {
   double h;          /* the grid's step */
   long np;           /* grid points per axis */
   long stride;       /* fine steps per grid step: 2^SCAN_MAX_DEPTH */
-  const slip_map *S; /* the slip for times j h / stride */
-  const over_map *O; /* the overshoot for the same times (n = 3) */
+  slip_map *S;       /* the slip for times j h / stride */
+  over_map *O;       /* the overshoot for the same times (n = 3) */
+  /* whether S[j] and O[j] are made: those of the grid's own times always,
+   * the finer ones when a split needs them (few do) */
+  unsigned char *made;
   double (*roots)[3];
   int max, count;
   int newton; /* Newton starts */
@@ -245,6 +249,17 @@ typedef struct scan {
    * [0] or inside a phase [1], and how far they fail (INFINITY: none) */
   double rejected[2][3], rejected_by[2];
 } scan;
+
+/* The maps at fine time j h / stride, made on first use. */
+static void make_maps(scan *sc, long j) {
+  if (sc->made[j])
+    return;
+  double t = (double)j * sc->h / (double)sc->stride;
+  slip_at(sc->m, t, &sc->S[j]);
+  if (sc->O)
+    over_at(sc->m, t, &sc->O[j]);
+  sc->made[j] = 1;
+}
 
 /* How far a root is from being an orbit (0: it may be one): each phase, sampled
  * at the grid's times and at its end, keeps the rule of its mode.  x2' < V
@@ -402,8 +417,8 @@ static int candidate(const point *c[4]) {
       double v = c[k]->Rn[r];
       if (!isfinite(v))
         return 0;
-      lo = fmin(lo, v);
-      hi = fmax(hi, v);
+      lo = v < lo ? v : lo; /* v is finite here */
+      hi = v > hi ? v : hi;
     }
     double spread = hi - lo;
     if (lo > 0.5 * spread || hi < -0.5 * spread)
@@ -467,8 +482,8 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
     pos |= c[k]->det > 0;
     neg |= !(c[k]->det > 0);
     if (isfinite(t3)) {
-      lo = fmin(lo, t3);
-      hi = fmax(hi, t3);
+      lo = t3 < lo ? t3 : lo; /* t3 is finite here */
+      hi = t3 > hi ? t3 : hi;
       near |= t3 > -0.5 && t3 < dm + 0.5;
     }
   }
@@ -480,8 +495,10 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
   if (!across) {
     double elo = INFINITY, ehi = -INFINITY;
     for (int k = 0; k < 4; k++) {
-      elo = fmin(elo, c[k]->E);
-      ehi = fmax(ehi, c[k]->E);
+      /* as fmin and fmax, a NAN is passed over */
+      double E = c[k]->E;
+      elo = E < elo ? E : elo;
+      ehi = E > ehi ? E : ehi;
     }
     if (isfinite(elo) && isfinite(ehi) &&
         (elo > 0.5 * (ehi - elo) || ehi < -0.5 * (ehi - elo)))
@@ -493,6 +510,8 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
     if (k1 - i1 < 2)
       return;
     long m1 = (i1 + k1) / 2, m2 = (i2 + k2) / 2;
+    make_maps(sc, m1);
+    make_maps(sc, m2);
     const slip_map *S = sc->S;
     const over_map *O = sc->O;
     point e[5]; /* (i1, m2) (m1, i2) (m1, m2) (m1, k2) (k1, m2) */
@@ -534,11 +553,13 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
   over_map *O = n == 3 ? malloc((size_t)nf * sizeof *O) : NULL;
   point *row = malloc(2 * (size_t)np * sizeof *row);
   double(*cs)[2] = malloc((size_t)np * sizeof *cs);
-  if (!S || (n == 3 && !O) || !row || !cs) {
+  unsigned char *made = calloc((size_t)nf, 1);
+  if (!S || (n == 3 && !O) || !row || !cs || !made) {
     free(S);
     free(O);
     free(row);
     free(cs);
+    free(made);
     return SS_ENOMEM;
   }
   for (long j = 0; j < np; j++) {
@@ -556,15 +577,12 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
              .stride = stride,
              .S = S,
              .O = O,
+             .made = made,
              .roots = roots,
              .max = max_roots,
              .rejected_by = {INFINITY, INFINITY}};
-  for (long i = 0; i < nf; i++) {
-    double t = (double)i * h / (double)stride;
-    slip_at(m, t, &S[i]);
-    if (O)
-      over_at(m, t, &O[i]);
-  }
+  for (long i = 0; i < nf; i += stride)
+    make_maps(&sc, i);
   /* rows t1 = i h; the first row of cells (t1 < h) is degenerate: at
    * t1 = 0 the slip's end condition holds for every s */
   int rc = SS_OK;
@@ -596,6 +614,7 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
   free(O);
   free(row);
   free(cs);
+  free(made);
   *n_roots = sc.count < max_roots ? sc.count : max_roots;
   for (int k = 0; k < 2; k++)
     if (isfinite(sc.rejected_by[k]))
