@@ -234,11 +234,11 @@ typedef struct scan {
   int n;       /* 2: slip-stick, 3: slip-overshoot-stick */
   double dmax; /* the box */
   double scale;
-  double h;          /* the grid's step */
-  long np;           /* grid points per axis */
-  long stride;       /* fine steps per grid step: 2^SCAN_MAX_DEPTH */
-  slip_map *S;       /* the slip for times j h / stride */
-  over_map *O;       /* the overshoot for the same times (n = 3) */
+  double h;    /* the grid's step */
+  long np;     /* grid points per axis */
+  long stride; /* fine steps per grid step: 2^SCAN_MAX_DEPTH */
+  slip_map *S; /* the slip for times j h / stride */
+  over_map *O; /* the overshoot for the same times (n = 3) */
   /* whether S[j] and O[j] are made: those of the grid's own times always,
    * the finer ones when a split needs them (few do) */
   unsigned char *made;
@@ -405,6 +405,22 @@ static int newton(scan *sc, double t1, double t2, double h) {
   return 1;
 }
 
+/* Do the corners' E reach zero within half their spread?  A root needs
+ * E = 0 (the stick is a rotation), wherever the stick's duration turns, so
+ * a cell whose E keeps one sign has none.  E not finite at a corner: not
+ * said. */
+static int e_reaches_zero(const point *c[4]) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (int k = 0; k < 4; k++) {
+    /* as fmin and fmax, a NAN is passed over */
+    double E = c[k]->E;
+    lo = E < lo ? E : lo;
+    hi = E > hi ? E : hi;
+  }
+  return !(isfinite(lo) && isfinite(hi) &&
+           (lo > 0.5 * (hi - lo) || hi < -0.5 * (hi - lo)));
+}
+
 /* Does each component's corner values reach zero within half their
  * spread?  Where not both change sign, the plane through the corners must
  * also put the zero within two cells of the centre (Newton's first step,
@@ -448,7 +464,7 @@ static int candidate(const point *c[4]) {
  * halvings. */
 static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
                      const point *c[4], int refine) {
-  if (!candidate(c) ||
+  if (!e_reaches_zero(c) || !candidate(c) ||
       newton(sc, 0.5 * (a1 + b1), 0.5 * (a2 + b2), b1 - a1) != -1 ||
       refine == 0)
     return;
@@ -492,18 +508,8 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
   if (!near && !across)
     return;
   /* away from a pole, E must reach zero in the cell */
-  if (!across) {
-    double elo = INFINITY, ehi = -INFINITY;
-    for (int k = 0; k < 4; k++) {
-      /* as fmin and fmax, a NAN is passed over */
-      double E = c[k]->E;
-      elo = E < elo ? E : elo;
-      ehi = E > ehi ? E : ehi;
-    }
-    if (isfinite(elo) && isfinite(ehi) &&
-        (elo > 0.5 * (ehi - elo) || ehi < -0.5 * (ehi - elo)))
-      return;
-  }
+  if (!across && !e_reaches_zero(c))
+    return;
   double hf = sc->h / (double)sc->stride;
   /* split; at the finest level a cell with no pole is tried as it is */
   if ((across || !(hi - lo <= SCAN_T3_TURN)) && (k1 - i1 >= 2 || across)) {
