@@ -408,7 +408,10 @@ static int newton(scan *sc, double t1, double t2, double h) {
 /* Do the corners' E reach zero within half their spread?  A root needs
  * E = 0 (the stick is a rotation), wherever the stick's duration turns, so
  * a cell whose E keeps one sign has none.  E not finite at a corner: not
- * said. */
+ * said.  Used for the slip-overshoot-stick cells, at every refinement (it
+ * halves the Newton starts where the stick's duration turns fast); for the
+ * slip-stick cells it lost one of the search battery's orbits at effort 1,
+ * so those go by the residual alone. */
 static int e_reaches_zero(const point *c[4]) {
   double lo = INFINITY, hi = -INFINITY;
   for (int k = 0; k < 4; k++) {
@@ -464,7 +467,7 @@ static int candidate(const point *c[4]) {
  * halvings. */
 static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
                      const point *c[4], int refine) {
-  if (!e_reaches_zero(c) || !candidate(c) ||
+  if ((sc->n == 3 && !e_reaches_zero(c)) || !candidate(c) ||
       newton(sc, 0.5 * (a1 + b1), 0.5 * (a2 + b2), b1 - a1) != -1 ||
       refine == 0)
     return;
