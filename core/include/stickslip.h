@@ -645,9 +645,9 @@ typedef struct ss_orbit {
   ss_orbit_source source; /**< how the search found it */
   /** When ss_orbit_check() rejects it: the condition that fails
    *  (violation_name: "duration", "phase_end", "grazing", "ends_early",
-   *  "switching"), its margin (< 0: how far it fails; 0 for a grazing), the
-   *  phase and the time in it.  The margins above then cover the phases up
-   *  to that one.  violation_name is empty for a feasible orbit. */
+   *  "transversality", "switching"), its margin (< 0: how far it fails; 0 for a
+   * grazing), the phase and the time in it.  The margins above then cover the
+   * phases up to that one.  violation_name is empty for a feasible orbit. */
   ss_margin violation;
   char violation_name[16];
 } ss_orbit;

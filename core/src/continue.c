@@ -501,6 +501,89 @@ static void locate(cont *c, const double *ya, const double *yb,
   add_special(b, &s);
 }
 
+/* The slope at the end of phase k of the function that ends it, as
+ * ss_orbit_check() takes it (its transversality margin there), by the
+ * closed form of the phases from z0. */
+static double end_slope(const ss_model *m, int n, const ss_mode *modes,
+                        const double *tau, const double z0[4], int k) {
+  double x[4], v[2];
+  ss_trig ge;
+  ss_mode mode = modes[k], want = k + 1 < n ? modes[k + 1] : SS_MODE_SLIP;
+  ss_z_to_x(m, z0, x);
+  for (int j = 0; j < k; j++)
+    ss_flow(m, modes[j], tau[j], x, x);
+  ss__switching(
+      m, mode, mode == SS_MODE_STICK ? (want == SS_MODE_OVERSHOOT ? -1 : 1) : 0,
+      x, &ge);
+  ss_trig_eval(&ge, tau[k], 1, v);
+  return v[1];
+}
+
+/* The end slope of phase k at the family's point y (NAN where the
+ * parameter or the equations fail). */
+static double slope_at(const cont *c, const double *y, int k) {
+  ss_model m;
+  double tau[SS_MAX_PHASES], z0[4], F[SS_MAX_PHASES];
+  if (model_at(c, value_of(c, y), &m) != SS_OK)
+    return NAN;
+  for (int j = 0; j < c->n; j++)
+    tau[j] = c->T * y[j];
+  if (ss_orbit_equations(&m, c->n, c->modes, tau, z0, F, NULL) != SS_OK)
+    return NAN;
+  return end_slope(&m, c->n, c->modes, tau, z0, k);
+}
+
+/* A phase that ends tangentially: the feasibility check cannot tell a
+ * crossing whose slope is within about sqrt(tol |g''|) of zero from a touch
+ * (its rise above zero is below the event tolerance), so the bisection
+ * above stops that far from the tangency.  The tangency itself is where
+ * the end slope, a smooth function along the family, is zero: the secant
+ * (Illinois) on the chord from the last feasible point (slope > 0) to yb
+ * (slope <= 0), each try corrected onto the family.  1 and *value when it
+ * is located to a relative 1e-13 in the parameter. */
+static int tangency_on_chord(const cont *c, const double *ya, const double *yb,
+                             double th_lo, int k, double *value, double *prec) {
+  double y[NMAX], res, a = th_lo, b = 1, fa, fb;
+  if (on_chord(c, ya, yb, a, y, &res) != SS_OK ||
+      !((fa = slope_at(c, y, k)) > 0))
+    return 0;
+  memcpy(y, yb, sizeof y[0] * (size_t)(c->n + 1));
+  if (!((fb = slope_at(c, y, k)) <= 0))
+    return 0;
+  double va = value_of(c, ya), vb = value_of(c, yb);
+  int side = 0;
+  for (int it = 0; it < 100; it++) {
+    double th = (a * fb - b * fa) / (fb - fa), f;
+    if (!(th > a && th < b))
+      th = 0.5 * (a + b);
+    if (on_chord(c, ya, yb, th, y, &res) != SS_OK ||
+        !isfinite(f = slope_at(c, y, k)))
+      return 0;
+    double v = value_of(c, y);
+    if (f > 0) {
+      a = th;
+      fa = f;
+      va = v;
+      if (side == -1)
+        fb /= 2;
+      side = -1;
+    } else {
+      b = th;
+      fb = f;
+      vb = v;
+      if (side == 1)
+        fa /= 2;
+      side = 1;
+    }
+    if (f == 0 || fabs(vb - va) <= 1e-13 * fabs(v)) {
+      *value = f == 0 ? v : va - fa * (vb - va) / (fb - fa);
+      *prec = fabs(vb - va) / fmax(fabs(*value), DBL_MIN);
+      return 1;
+    }
+  }
+  return 0;
+}
+
 /* Bisect the feasibility boundary between the feasible ya and the
  * infeasible yb; record the grazing and the last feasible point. */
 static void locate_grazing(cont *c, const double *ya, const double *yb,
@@ -538,6 +621,14 @@ static void locate_grazing(cont *c, const double *ya, const double *yb,
   s.value = plo.value;
   s.precision = fabs(vhi - vlo) / fmax(fabs(s.value), DBL_MIN);
   snprintf(s.margin, sizeof s.margin, "%s", min_margin_name(c, ylo));
+  if (!strcmp(s.margin, "transversality")) {
+    double v, prec;
+    if (tangency_on_chord(c, ya, yb, lo, plo.min_margin.phase, &v, &prec)) {
+      s.value = v;
+      s.precision = prec;
+      ok = 1;
+    }
+  }
   s.stable_before = s.stable_after = plo.stable;
   snprintf(s.detail, sizeof s.detail,
            "the %.24s margin reaches zero in phase %d at %.4s = %.15g%.30s; "
@@ -822,6 +913,10 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
 
 /* ---- a grazing followed in two parameters ------------------------------ */
 
+#ifndef SIDE_OFFSET_TANGENCY
+#define SIDE_OFFSET_TANGENCY 1e-5
+#endif
+
 typedef struct gcont {
   ss_params p;
   ss_special_kind kind; /* GRAZING or PERIOD_DOUBLING */
@@ -834,6 +929,9 @@ typedef struct gcont {
   /* an interior grazing: the margin (its index in INTERIOR) has a zero
    * maximum inside phase k, at local time t* = T y[n], one more unknown */
   int interior, margin;
+  /* a transversality grazing: phase k ends tangentially, the slope of its
+   * switching function zero at its end */
+  int transversal;
 } gcont;
 
 /* The unknowns of a curve: durations, t* (interior grazing), q1, q2. */
@@ -914,6 +1012,10 @@ static int gc_values(const gcont *g, const double *y, double *F) {
     F[g->n + 1] = (v[2] - v[0]) / (2 * h) * g->T;
     return SS_OK;
   }
+  if (g->kind == SS_SPECIAL_GRAZING && g->transversal) {
+    F[g->n] = end_slope(&m, g->n, g->modes, tau, z0, g->k) * g->T;
+    return SS_OK;
+  }
   if (g->kind == SS_SPECIAL_GRAZING) {
     F[g->n] = switch_margin(&m, g, tau, z0);
     return SS_OK;
@@ -973,11 +1075,15 @@ static int gc_f(const void *ctx, const double *y, double *F, double *J) {
 
 /* The side of p1 on which the orbit at y exists: the orbit solved at
  * p1 (1 +- 1e-7) from y's durations is feasible on one side only (+1 or
- * -1); 0 when both or neither are. */
+ * -1); 0 when both or neither are.  A transversality grazing is a
+ * tangency: the end slope grows like the distance d to it, the function's
+ * rise above zero like d^2, and below the event tolerance a crossing is a
+ * touch (infeasible), so its side is taken at 1 +- SIDE_OFFSET_TANGENCY. */
 static int feasible_side(const gcont *g, const double *y) {
   ss_params p;
   gc_params(g, y, &p);
   double v1 = *ss__param_ref(&p, g->id1), tau[SS_MAX_PHASES];
+  double off = g->transversal ? SIDE_OFFSET_TANGENCY : 1e-7;
   int ok[2];
   for (int k = 0; k < g->n; k++)
     tau[k] = g->T * y[k];
@@ -985,7 +1091,7 @@ static int feasible_side(const gcont *g, const double *y) {
     ss_params q = p;
     ss_model m;
     ss_orbit o;
-    *ss__param_ref(&q, g->id1) = v1 * (1 + (s ? 1e-7 : -1e-7));
+    *ss__param_ref(&q, g->id1) = v1 * (1 + (s ? off : -off));
     ok[s] = ss_model_init(&m, &q, NULL) == SS_OK &&
             ss_orbit_solve(&m, g->n, g->modes, tau, NULL, &o, NULL) == SS_OK;
   }
@@ -1163,16 +1269,19 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   for (int i = 0; i < 4; i++)
     if (!strcmp(g->margin, INTERIOR[i]))
       interior = i;
+  int transversal = !strcmp(g->margin, "transversality");
   if (kind == SS_SPECIAL_GRAZING &&
       (g->kind != SS_SPECIAL_GRAZING || g->at.min_margin.phase < 0 ||
        g->at.min_margin.phase >= b->n_phases ||
-       (interior < 0 && (strcmp(g->margin, "switching") ||
-                         b->modes[g->at.min_margin.phase] == SS_MODE_STICK)) ||
+       (interior < 0 && !transversal &&
+        (strcmp(g->margin, "switching") ||
+         b->modes[g->at.min_margin.phase] == SS_MODE_STICK)) ||
        (interior >= 0 && !(g->at.min_margin.t > 0))))
     return ss__fail(d, SS_EINVAL, "special", 0,
                     "only a grazing of the switching condition at the end of "
-                    "a slip or overshoot, or of a margin's maximum inside a "
-                    "phase, can be followed");
+                    "a slip or overshoot, of a phase's end (transversality), "
+                    "or of a margin's maximum inside a phase, can be "
+                    "followed");
   if (kind == SS_SPECIAL_PERIOD_DOUBLING &&
       g->kind != SS_SPECIAL_PERIOD_DOUBLING)
     return ss__fail(d, SS_EINVAL, "special", 0, "not a period doubling");
@@ -1194,6 +1303,7 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   gc.k = kind == SS_SPECIAL_GRAZING ? g->at.min_margin.phase : 0;
   gc.interior = kind == SS_SPECIAL_GRAZING && interior >= 0;
   gc.margin = interior;
+  gc.transversal = kind == SS_SPECIAL_GRAZING && transversal;
   memcpy(gc.modes, b->modes, sizeof gc.modes);
   gc.lo1 = lo1;
   gc.S1 = scale_of(lo1, hi1, g->value);

@@ -421,7 +421,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
     return SS_EINVAL;
   double t0k = 0; /* the start of phase k */
   for (int k = 0; k < n; k++) {
-    double tau = o->durations[k], xs[4], g_end;
+    double tau = o->durations[k], xs[4], g_end, g_slope;
     ss_mode mode = o->modes[k],
             want = k + 1 < n ? o->modes[k + 1] : SS_MODE_SLIP;
     double slack = 1e-7 * (1 + tau);
@@ -464,6 +464,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
       ss_trig_eval(&ge, tau, 1, v);
       margin_set(&o->transversal, v[1], k, tau);
       g_end = v[0];
+      g_slope = v[1];
     }
     /* the certified finder: the first event must be this phase's end */
     int rc = ss_sim_next_event(&sim, ss_sim_time(&sim) + tau + slack, &ev);
@@ -496,6 +497,19 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
                  "phase %d (%s) ends early, at its first crossing t = %.9g "
                  "instead of %.9g",
                  k, mode, ev.t, t_expect);
+      return SS_INFEASIBLE;
+    }
+    /* falling (or flat) at its end, the switching function was above zero
+     * just before: it crossed zero earlier, and the phase ends early,
+     * however little (within the slack above: beside a tangency at the
+     * end, by about 2 |slope| / |curvature|) */
+    if (!(g_slope > 0)) {
+      violate(o, "transversality", g_slope, k, tau);
+      check_fail(d,
+                 "phase %d (%s) meets its end with the switching function's "
+                 "slope %.3g <= 0: it crossed zero before, so it ends early "
+                 "(its value there %.3g)",
+                 k, mode, g_slope, g_end);
       return SS_INFEASIBLE;
     }
     /* the switching conditions at the end of the phase */

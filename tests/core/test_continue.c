@@ -893,6 +893,155 @@ static void test_interior_grazing_curve(void) {
   ss_branch_free(&b);
 }
 
+/* The slope of |chi (x2 - x1)| at the end of the stick phase k of the
+ * orbit (modes, tau, x0) by the rk8pd reference: the phases integrated
+ * from their starts, the slope by central differences at the end (h 1e-4:
+ * an error of about h^2 / 6 times the third derivative, 1e-9 here). */
+static double ref_stick_end_slope(const ss_params *p, const ss_mode *modes,
+                                  const double *tau, const double x0[4],
+                                  int k) {
+  ref_params rp = {p->chi, p->eta, p->us, p->ur, p->V};
+  ref_opts ro = {gsl_odeiv2_step_rk8pd, 1e-13, 1e-13, 0, 1e-13};
+  double x[4], h = 1e-4, f[2];
+  memcpy(x, x0, sizeof x);
+  for (int j = 0; j < k; j++) {
+    ref_flow(&rp, (int)modes[j], tau[j], x, &ro);
+    if (j + 1 == k && modes[k] == SS_MODE_STICK)
+      x[3] = p->V; /* a stick starts at the belt's speed */
+  }
+  for (int s = 0; s < 2; s++) {
+    double xs[4];
+    memcpy(xs, x, sizeof xs);
+    ref_flow(&rp, (int)modes[k], tau[k] + (s ? h : -h), xs, &ro);
+    f[s] = p->chi * (xs[1] - xs[0]);
+  }
+  double slope = (f[1] - f[0]) / (2 * h);
+  return f[1] + f[0] < 0 ? -slope : slope;
+}
+
+/* EVIDENCE: README "Families": a phase that ends tangentially (the stick
+ * force reaching ur at its maximum, at the stick's end) is located at the
+ * zero of the end slope and followed in a second parameter; the rk8pd
+ * reference gives a zero slope there, and at every point of the curve the
+ * orbit exists on one side only (at 1e-5, outside the band where a crossing
+ * cannot be told from a touch) */
+static void test_transversality_curve(void) {
+  const ss_params p = {0.45718539037873918, 0.957262457729113,
+                       0.25138758401573669, 3.9803720170071393, 1};
+  ss_model m;
+  ss_orbit_opts oo;
+  ss_orbit found[16], *start = NULL;
+  int n = 0;
+  memset(&oo, 0, sizeof oo);
+  oo.kinds = SS_ORBIT_STICKSLIP;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, found, 16, &n, NULL, NULL), SS_OK);
+  for (int i = 0; i < n; i++)
+    if (found[i].n_phases == 2 && found[i].period < 6)
+      start = &found[i];
+  ASSERT_TRUE(start != NULL);
+  if (!start)
+    return;
+  ss_cont_opts co, o2;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_UR;
+  co.lo = 0.3 * p.ur;
+  co.hi = 3 * p.ur;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&p, start, &co, &b, NULL), SS_OK);
+  const ss_special *g = NULL;
+  for (int i = 0; i < b.n_special; i++)
+    if (b.special[i].kind == SS_SPECIAL_GRAZING &&
+        !strcmp(b.special[i].margin, "transversality"))
+      g = &b.special[i];
+  ASSERT_TRUE(g != NULL);
+  if (!g) {
+    ss_branch_free(&b);
+    return;
+  }
+  int k = g->at.min_margin.phase;
+  ASSERT_EQ_INT(b.modes[k], SS_MODE_STICK);
+  ASSERT_TRUE(g->precision <= 1e-12);
+  /* the located value: one side only at 1e-5 */
+  int ok1[2];
+  for (int s = 0; s < 2; s++) {
+    ss_params ps = p;
+    ss_orbit o;
+    ps.ur = g->value * (1 + (s ? 1e-5 : -1e-5));
+    ASSERT_EQ_INT(ss_model_init(&m, &ps, NULL), SS_OK);
+    ok1[s] = ss_orbit_solve(&m, b.n_phases, b.modes, g->at.durations, NULL, &o,
+                            NULL) == SS_OK;
+  }
+  ASSERT_TRUE(ok1[0] != ok1[1]);
+  /* just beyond it, where the early crossing is within the check's slack
+   * in time (2e-7 to 5e-7 here), the end slope's sign rejects the orbit */
+  int accepted = 0, by_slope = 0;
+  for (double e = -7.5; e <= -5.5; e += 0.1) {
+    ss_params ps = p;
+    ss_orbit o;
+    double off = pow(10, e);
+    ps.ur = g->value * (1 + (ok1[1] ? -off : off));
+    ASSERT_EQ_INT(ss_model_init(&m, &ps, NULL), SS_OK);
+    accepted += ss_orbit_solve(&m, b.n_phases, b.modes, g->at.durations, NULL,
+                               &o, NULL) == SS_OK;
+    by_slope += !strcmp(o.violation_name, "transversality");
+  }
+  ASSERT_EQ_INT(accepted, 0);
+  ASSERT_TRUE(by_slope >= 3);
+  memset(&o2, 0, sizeof o2);
+  o2.param = SS_PARAM_CHI;
+  o2.lo = 0.01;
+  o2.hi = 0.99;
+  o2.max_points = 200;
+  ss_curve cv;
+  ASSERT_EQ_INT(
+      ss_continue_grazing(&p, &b, g, SS_PARAM_UR, co.lo, co.hi, &o2, &cv, NULL),
+      SS_OK);
+  ASSERT_TRUE(cv.n_points > 20);
+  ASSERT_TRUE(!strcmp(cv.margin, "transversality"));
+  int sides = 0;
+  double worst = 0, located = NAN;
+  for (int j = 0; j < cv.n_points; j++) {
+    const ss_curve_point *q = &cv.points[j];
+    ss_params at = p;
+    at.ur = q->v1;
+    at.chi = q->v2;
+    int ok[2];
+    for (int s = 0; s < 2; s++) {
+      ss_params ps = at;
+      ss_orbit o;
+      ps.ur = q->v1 * (1 + (s ? 1e-5 : -1e-5));
+      ASSERT_EQ_INT(ss_model_init(&m, &ps, NULL), SS_OK);
+      ok[s] = ss_orbit_solve(&m, b.n_phases, b.modes, q->durations, NULL, &o,
+                             NULL) == SS_OK;
+    }
+    sides += ok[0] != ok[1] && ok[1] == (q->feasible_side > 0);
+    if (j % 10 == 0 || j == cv.start) {
+      double x0[4];
+      ASSERT_EQ_INT(ss_model_init(&m, &at, NULL), SS_OK);
+      ss_z_to_x(&m, q->z0, x0);
+      double sl = ref_stick_end_slope(&at, b.modes, q->durations, x0, k);
+      worst = fmax(worst, fabs(sl));
+      if (j == cv.start)
+        located = fabs(q->v1 - g->value) / g->value;
+    }
+  }
+  printf("the stick's tangential end at ur = %.12g (precision %.1e) followed "
+         "in chi: %d points from (ur, chi) = (%.6g, %.6g) to (%.6g, %.6g); "
+         "one side only at %d; rk8pd end slope within %.2g of zero; the "
+         "curve's start %.1e from the located value\n",
+         g->value, g->precision, cv.n_points, cv.points[0].v1, cv.points[0].v2,
+         cv.points[cv.n_points - 1].v1, cv.points[cv.n_points - 1].v2, sides,
+         worst, located);
+  ASSERT_EQ_INT(sides, cv.n_points);
+  ASSERT_TRUE(worst < 1e-7);
+  ASSERT_TRUE(located < 1e-12);
+  /* the boundary runs across the whole range of chi */
+  ASSERT_TRUE(cv.points[0].v2 == 0.01 && cv.points[cv.n_points - 1].v2 == 0.99);
+  ss_curve_free(&cv);
+  ss_branch_free(&b);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_ur_family();
@@ -906,5 +1055,6 @@ int main(void) {
   test_period_doubling_curve();
   test_physical();
   test_interior_grazing_curve();
+  test_transversality_curve();
   TEST_DONE();
 }
