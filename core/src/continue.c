@@ -1534,10 +1534,12 @@ int ss_beyond_grazing(const ss_params *p, const ss_branch *b,
   if (!p || !b || !g || !value || !a || g->kind != SS_SPECIAL_GRAZING ||
       !ss_param_name(param) || b->n_points < 2)
     return SS_EINVAL;
-  /* the family lies on one side of the grazing: its neighbour says which */
+  /* the family lies on one side of the grazing: its neighbour says which
+   * (the family's last point is g->at; g->value is past it by the location's
+   * precision, or at a tangential end by the band the check cannot decide) */
   int at = -1;
   for (int i = 0; i < b->n_points; i++)
-    if (b->points[i].value == g->value)
+    if (b->points[i].value == g->at.value)
       at = i;
   if (at < 0 || (at != 0 && at != b->n_points - 1))
     return SS_EINVAL;
@@ -1580,7 +1582,7 @@ int ss_continue_adjacent(const ss_params *p, const ss_branch *b,
   /* the side past the grazing: away from the family */
   int at = -1;
   for (int i = 0; i < b->n_points; i++)
-    if (b->points[i].value == g->value)
+    if (b->points[i].value == g->at.value)
       at = i;
   if (at < 0 || (at != 0 && at != b->n_points - 1))
     return ss__fail(d, SS_EINVAL, "special", g->value,

@@ -988,6 +988,14 @@ static void test_transversality_curve(void) {
   }
   ASSERT_EQ_INT(accepted, 0);
   ASSERT_TRUE(by_slope >= 3);
+  /* past it, the motion settles on an attractor of its own */
+  double past;
+  ss_attractor att;
+  ASSERT_EQ_INT(ss_beyond_grazing(&p, &b, g, SS_PARAM_UR, &past, &att), SS_OK);
+  ASSERT_TRUE(att.found || att.perpetual_slip);
+  printf("past the tangential end (ur = %.9g): an attractor of %d turns, "
+         "period %.6g, %d phases\n",
+         past, att.n_turns, att.period, att.n_phases);
   memset(&o2, 0, sizeof o2);
   o2.param = SS_PARAM_CHI;
   o2.lo = 0.01;
