@@ -511,7 +511,8 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
     if (s->kind == SS_SPECIAL_GRAZING) {
       api__set(o, "margin", json_string(s->margin));
       api__set(o, "phase", json_integer(s->at.min_margin.phase));
-      api__set(o, "t", api__real(s->at.min_margin.t / omega_at(x, s->value)));
+      api__set(o, "t",
+               api__real(s->at.min_margin.t / omega_at(x, s->at.value)));
       api__set(o, "margin_value", api__real(s->at.min_margin.value));
       if (first)
         api__set(o, "beyond", beyond_json(x, i));

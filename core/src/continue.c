@@ -533,33 +533,76 @@ static double slope_at(const cont *c, const double *y, int k) {
   return end_slope(&m, c->n, c->modes, tau, z0, k);
 }
 
+/* Whether the orbit at the family's point y fails where a phase ends
+ * tangentially: at phase k, by a touch (grazing), a maximum just short of
+ * zero (phase_end), a crossing before its end (ends_early) or a falling end
+ * (transversality), or with a stability that is singular there. */
+static int tangential_failure(const cont *c, const double *y, int k) {
+  ss_model m;
+  ss_orbit o;
+  double F[SS_MAX_PHASES];
+  memset(&o, 0, sizeof o);
+  if (model_at(c, value_of(c, y), &m) != SS_OK)
+    return 0;
+  o.n_phases = c->n;
+  o.kind = ss_orbit_kind_of(c->n, c->modes);
+  for (int j = 0; j < c->n; j++) {
+    o.modes[j] = c->modes[j];
+    o.durations[j] = c->T * y[j];
+  }
+  if (ss_orbit_equations(&m, c->n, c->modes, o.durations, o.z0, F, NULL) !=
+      SS_OK)
+    return 0;
+  if (ss_orbit_check(&m, &o, NULL) == SS_OK) {
+    ss_stab_opts so = {o.n_turns, 0};
+    ss_stab st;
+    return ss_stability(&m, c->n, c->modes, o.durations, o.z0, &so, &st) ==
+           SS_ESINGULAR;
+  }
+  return o.violation.phase == k &&
+         (!strcmp(o.violation_name, "grazing") ||
+          !strcmp(o.violation_name, "phase_end") ||
+          !strcmp(o.violation_name, "ends_early") ||
+          !strcmp(o.violation_name, "transversality"));
+}
+
 /* A phase that ends tangentially: the feasibility check cannot tell a
  * crossing whose slope is within about sqrt(tol |g''|) of zero from a touch
  * (its rise above zero is below the event tolerance), so the bisection
  * above stops that far from the tangency.  The tangency itself is where
- * the end slope, a smooth function along the family, is zero: the secant
- * (Illinois) on the chord from the last feasible point (slope > 0) to yb
- * (slope <= 0), each try corrected onto the family.  1 and *value when it
- * is located to a relative 1e-13 in the parameter. */
+ * the end slope, a smooth function along the family, is zero: Illinois
+ * steps on the chord from the last feasible point (th_lo, slope > 0) to yb
+ * (slope <= 0), every third a bisection, each try corrected onto the
+ * family.  The corrector leaves the slope noisy near 1e-10, so the bracket
+ * can stop shrinking before 1e-13: it ends when it is that narrow in the
+ * parameter or a few ulps wide in th.  1, the value and the bracket's
+ * relative width in *prec (one ulp for an exact zero); 0 when the slope
+ * does not change sign on the chord or a try fails. */
 static int tangency_on_chord(const cont *c, const double *ya, const double *yb,
                              double th_lo, int k, double *value, double *prec) {
   double y[NMAX], res, a = th_lo, b = 1, fa, fb;
   if (on_chord(c, ya, yb, a, y, &res) != SS_OK ||
       !((fa = slope_at(c, y, k)) > 0))
     return 0;
+  double va = value_of(c, y);
   memcpy(y, yb, sizeof y[0] * (size_t)(c->n + 1));
   if (!((fb = slope_at(c, y, k)) <= 0))
     return 0;
-  double va = value_of(c, ya), vb = value_of(c, yb);
+  double vb = value_of(c, y);
   int side = 0;
-  for (int it = 0; it < 100; it++) {
+  for (int it = 0; it < 200; it++) {
     double th = (a * fb - b * fa) / (fb - fa), f;
-    if (!(th > a && th < b))
+    if (it % 3 == 2 || !(th > a && th < b))
       th = 0.5 * (a + b);
     if (on_chord(c, ya, yb, th, y, &res) != SS_OK ||
         !isfinite(f = slope_at(c, y, k)))
       return 0;
     double v = value_of(c, y);
+    if (f == 0) {
+      *value = v;
+      *prec = DBL_EPSILON;
+      return 1;
+    }
     if (f > 0) {
       a = th;
       fa = f;
@@ -575,8 +618,11 @@ static int tangency_on_chord(const cont *c, const double *ya, const double *yb,
         fa /= 2;
       side = 1;
     }
-    if (f == 0 || fabs(vb - va) <= 1e-13 * fabs(v)) {
-      *value = f == 0 ? v : va - fa * (vb - va) / (fb - fa);
+    if (fabs(vb - va) <= 1e-13 * fabs(v) ||
+        b - a <= 4 * DBL_EPSILON * fmax(fabs(a), fabs(b))) {
+      *value = va - fa * (vb - va) / (fb - fa);
+      if (!(*value >= fmin(va, vb) && *value <= fmax(va, vb)))
+        *value = 0.5 * (va + vb);
       *prec = fabs(vb - va) / fmax(fabs(*value), DBL_MIN);
       return 1;
     }
@@ -622,11 +668,19 @@ static void locate_grazing(cont *c, const double *ya, const double *yb,
   s.precision = fabs(vhi - vlo) / fmax(fabs(s.value), DBL_MIN);
   snprintf(s.margin, sizeof s.margin, "%s", min_margin_name(c, ylo));
   if (!strcmp(s.margin, "transversality")) {
-    double v, prec;
-    if (tangency_on_chord(c, ya, yb, lo, plo.min_margin.phase, &v, &prec)) {
+    /* a tangency only where the first infeasible point fails at the end of
+     * the same phase; then at the zero of the end slope, or said not
+     * located */
+    double v, prec, yhi[NMAX];
+    int k = plo.min_margin.phase;
+    if (on_chord(c, ya, yb, hi, yhi, &res) == SS_OK &&
+        tangential_failure(c, yhi, k) &&
+        tangency_on_chord(c, ya, yb, lo, k, &v, &prec)) {
       s.value = v;
       s.precision = prec;
-      ok = 1;
+      ok = prec <= 1e-10;
+    } else {
+      ok = 0;
     }
   }
   s.stable_before = s.stable_after = plo.stable;
@@ -916,6 +970,7 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
 #ifndef SIDE_OFFSET_TANGENCY
 #define SIDE_OFFSET_TANGENCY 1e-5
 #endif
+#define SIDE_OFFSET_MAX 1e-3
 
 typedef struct gcont {
   ss_params p;
@@ -1078,24 +1133,33 @@ static int gc_f(const void *ctx, const double *y, double *F, double *J) {
  * -1); 0 when both or neither are.  A transversality grazing is a
  * tangency: the end slope grows like the distance d to it, the function's
  * rise above zero like d^2, and below the event tolerance a crossing is a
- * touch (infeasible), so its side is taken at 1 +- SIDE_OFFSET_TANGENCY. */
+ * touch (infeasible), so its side is taken at 1 +- SIDE_OFFSET_TANGENCY,
+ * or ten or a hundred times that where neither side is feasible there. */
 static int feasible_side(const gcont *g, const double *y) {
   ss_params p;
   gc_params(g, y, &p);
   double v1 = *ss__param_ref(&p, g->id1), tau[SS_MAX_PHASES];
   double off = g->transversal ? SIDE_OFFSET_TANGENCY : 1e-7;
-  int ok[2];
   for (int k = 0; k < g->n; k++)
     tau[k] = g->T * y[k];
-  for (int s = 0; s < 2; s++) {
-    ss_params q = p;
-    ss_model m;
-    ss_orbit o;
-    *ss__param_ref(&q, g->id1) = v1 * (1 + (s ? off : -off));
-    ok[s] = ss_model_init(&m, &q, NULL) == SS_OK &&
-            ss_orbit_solve(&m, g->n, g->modes, tau, NULL, &o, NULL) == SS_OK;
+  for (;;) {
+    int ok[2];
+    for (int s = 0; s < 2; s++) {
+      ss_params q = p;
+      ss_model m;
+      ss_orbit o;
+      *ss__param_ref(&q, g->id1) = v1 * (1 + (s ? off : -off));
+      ok[s] = ss_model_init(&m, &q, NULL) == SS_OK &&
+              ss_orbit_solve(&m, g->n, g->modes, tau, NULL, &o, NULL) == SS_OK;
+    }
+    if (ok[0] != ok[1])
+      return ok[1] ? 1 : -1;
+    /* at a tangency neither side is feasible while the offset is inside
+     * the band the check cannot decide (wider where the curvature at the
+     * phase's end is small): ten times further, up to SIDE_OFFSET_MAX */
+    if (!g->transversal || ok[0] || (off *= 10) > SIDE_OFFSET_MAX)
+      return 0;
   }
-  return ok[1] && !ok[0] ? 1 : ok[0] && !ok[1] ? -1 : 0;
 }
 
 static void gc_point(const gcont *g, const double *y, int side,
@@ -1336,6 +1400,16 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   if (rc != SS_OK)
     return ss__fail(d, SS_ENOCONV, "special", g->value,
                     "no curve through the located point");
+  /* a tangency's curve passes through its located value; one that does not
+   * was no tangency (the family ended otherwise, its smallest margin a
+   * slope) */
+  double v1 = gc.lo1 + gc.S1 * y0[iq1];
+  if (gc.transversal &&
+      !(fabs(v1 - g->value) <= fmax(1e-8, 10 * g->precision) * fabs(g->value)))
+    return ss__fail(d, SS_ENOCONV, "special", g->value,
+                    "the family does not end at a tangency of phase %d's end "
+                    "here (the curve of a zero end slope passes %s = %.9g)",
+                    gc.k, ss_param_name(gc.id1), v1);
   int side = kind == SS_SPECIAL_GRAZING ? feasible_side(&gc, y0) : 0;
   cont stop;
   memset(&stop, 0, sizeof stop);
