@@ -346,7 +346,8 @@ SS_API void ss_trig_eval(const ss_trig *g, double t, int order, double *out);
  *         -tol: g can never reach zero), SS_ABOVE (g is positive at t0
  *         beyond tol: there is no first crossing from below), SS_EINVAL
  *         (bad arguments: NULL, n outside 0..SS_TRIG_MAX, t0 not finite,
- *         tmax not above t0).  Thread-safe; allocates nothing.
+ *         tmax not above t0, a coefficient or frequency not finite).
+ *         Thread-safe; allocates nothing.
  */
 SS_API int ss_trig_first_root(const ss_trig *g, double t0, double tmax,
                               double *t);

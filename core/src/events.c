@@ -295,8 +295,11 @@ static int first_root(const ss_trig *g, double t0, double tmax, double *t,
   if (rec)
     rec->valid = rec->n = 0;
   if (!g || !t || g->n < 0 || g->n > SS_TRIG_MAX || !isfinite(t0) ||
-      !(tmax > t0))
+      !(tmax > t0) || !isfinite(g->c0) || !isfinite(g->c1))
     return SS_EINVAL;
+  for (int k = 0; k < g->n; k++)
+    if (!isfinite(g->a[k]) || !isfinite(g->b[k]) || !isfinite(g->w[k]))
+      return SS_EINVAL;
   get_bounds(g, &b);
   double tol = tol_at(g, &b, t0);
   /* For c1 <= 0 the supremum of g over [t0, inf) is at most
@@ -393,7 +396,8 @@ static distance distance_to(const ss_trig *g, const ss__root_cert *c) {
   double E0 = 0, E1 = 0, E2 = 0, E3 = 0, size = fabs(g->c0);
   for (int k = 0; k < g->n; k++) {
     double w = g->w[k];
-    if (w != r->w[k])
+    /* the bounds below are sums of |e| w^j: for w > 0 only */
+    if (w != r->w[k] || !(w > 0))
       return d;
     double e = fabs(g->a[k] - r->a[k]) + fabs(g->b[k] - r->b[k]);
     E0 += e;
@@ -427,17 +431,26 @@ static int from_record(const ss_trig *g, double tmax, ss__root_cert *c,
   if (!(hi <= tmax))
     return -1;
   /* g's own start: at 0 (free of sines), negative or leaving zero downward
-   * at once (the first case of escape()); F0 bounds g from 0 on. */
+   * at once (the first case of escape()); F0 bounds g from 0 on.  Within
+   * the bounds' tolerance of zero the start is judged as the full search
+   * judges it, with g's own bounds and tolerance: the record's, larger, once
+   * took a g(0) between the two for a start below zero where the full
+   * search says SS_ABOVE. */
   double v[4], tol = tol_at(g, b, 0), s = 0;
   ss_trig_eval(g, 0, 3, v);
-  if (v[0] > tol)
-    return -1;
   if (v[0] >= -tol) {
-    if (departure(b, tol, v) > 0 || !(v[1] < 0 && b->M2 > 0))
+    bounds own;
+    get_bounds(g, &own);
+    double tol0 = tol_at(g, &own, 0);
+    if (v[0] > tol0)
       return -1;
-    s = -v[1] / b->M2;
-    if (!(v[0] + v[1] * s + b->M2 * s * s / 2 < -tol))
-      return -1;
+    if (v[0] >= -tol0) {
+      if (departure(&own, tol0, v) > 0 || !(v[1] < 0 && own.M2 > 0))
+        return -1;
+      s = -v[1] / own.M2;
+      if (!(v[0] + v[1] * s + own.M2 * s * s / 2 < -tol0))
+        return -1;
+    }
   }
   /* [s, a_1] (or [s, lo] with no point between): F0, g's own bound from
    * 0 (with M >= its M2), and there B_1 + D as well, the record's bound

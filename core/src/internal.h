@@ -143,6 +143,9 @@ struct ss_sim {
   int have_next;
   double next_horizon; /* local horizon the search for t_next used */
   int full_search;     /* no certificates (ss_sim_opts.full_search) */
+  /* stick anchored at a touch of +ur (+1) or -ur (-1): that side's
+   * function is at its maximum there, on the surface */
+  int touch;
   /* the last searches' certificates: slip, overshoot, stick at +ur, -ur */
   ss__root_cert cert[4][SS__CERT_SLOTS];
 };

@@ -103,6 +103,21 @@ static double local_time(const ss_sim *s, double t) {
   return (t - s->t_hi) - s->t_lo;
 }
 
+/* A stick that goes on after its force touched +-ur starts at that touch:
+ * the side's function is at its maximum, zero but for the rounding of the
+ * state at the event, which the previous anchor's tolerance (it holds the
+ * |c1 t| of the time since) covered and the new one, without it, may not:
+ * a value of 2.4e-15 against a tolerance of 2.3e-15 made the next search
+ * refuse the stick (+ur) or never look at -ur again.  Above zero, the
+ * value is taken off c0 (the later roots move by that over the slope,
+ * rounding); the search then leaves the touch downward. */
+static void on_surface(ss_trig *g) {
+  double v[1];
+  ss_trig_eval(g, 0, 0, v);
+  if (v[0] > 0)
+    g->c0 -= v[0];
+}
+
 /* Find the next event within local horizon H (cached). */
 static int sim_find(ss_sim *s, double H) {
   ss_trig g;
@@ -143,6 +158,8 @@ static int sim_find(ss_sim *s, double H) {
   double t_up, t_lo;
   int rc_lo;
   ss__switching(s->m, SS_MODE_STICK, 1, s->x, &g);
+  if (s->touch == 1)
+    on_surface(&g);
   rc = ss__trig_first_root_cert(&g, H, s->cert[2], slots, &t_up);
   /* a stick force already beyond +ur: the state is not a stick */
   if (rc == SS_ABOVE)
@@ -152,6 +169,8 @@ static int sim_find(ss_sim *s, double H) {
     return rc;
   }
   ss__switching(s->m, SS_MODE_STICK, -1, s->x, &g);
+  if (s->touch == -1)
+    on_surface(&g);
   rc_lo = ss__trig_first_root_cert(
       &g, rc == SS_HORIZON ? H : fmax(t_up, 1e-300), s->cert[3], slots, &t_lo);
   /* SS_ABOVE: the force starts below -ur beyond the tolerance while the
@@ -233,6 +252,8 @@ static void sim_commit(ss_sim *s, ss_event *ev) {
   abs_time2(s, tau, &s->t_hi, &s->t_lo);
   memcpy(s->x, xe, sizeof xe);
   s->mode = to;
+  s->touch =
+      from == SS_MODE_STICK && kind == SS_EVENT_GRAZING ? s->next_sign : 0;
   s->have_next = 0;
   s->perpetual = 0;
   if (ev) {

@@ -431,6 +431,32 @@ static void test_slots(void) {
   ASSERT_TRUE(all_hits > 0.7 * (double)max_hits);
 }
 
+/* A start just above zero: the record's tolerance is wider than the new
+ * function's own (the bounds derived from the record's are larger), and a
+ * g(0) between the two once was taken for a start below zero, a root
+ * answered where the full search says SS_ABOVE.  g(0) is walked across
+ * both tolerances, one ulp of c0 at a time. */
+static void test_start_tolerance(void) {
+  ss_trig ref = {0}, g;
+  ref.n = 1;
+  ref.w[0] = 1;
+  ref.b[0] = -1; /* -sin t: its first zero after 0 at pi */
+  ss__root_cert c = {0};
+  double t;
+  ASSERT_EQ_INT(ss__trig_first_root_cert(&ref, 60, &c, 1, &t), SS_OK);
+  ASSERT_TRUE(c.valid);
+  g = ref;
+  g.a[0] = 0x1.47ae147ae147bp-7;
+  g.c0 = -0x1.47ae147ae0c66p-7; /* g(0) 3.6e-15, above its tolerance */
+  int seen_above = 0;
+  for (int k = 0; k < 400; k++, g.c0 = nextafter(g.c0, -1)) {
+    compare(&g, 60, &c);
+    seen_above += ss_trig_first_root(&g, 0, 60, &t) == SS_ABOVE;
+  }
+  /* the walk crosses the tolerance: both kinds of start were compared */
+  ASSERT_TRUE(seen_above > 0 && seen_above < 400);
+}
+
 int main(void) {
   test_near(0);
   test_near(1);
@@ -442,6 +468,7 @@ int main(void) {
   test_first_piece();
   test_slots();
   test_mismatch();
+  test_start_tolerance();
   printf("%d comparisons, %d answered from the record, %d in full\n",
          n_compared, n_fast, n_full);
   TEST_DONE();

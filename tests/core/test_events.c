@@ -189,7 +189,7 @@ static void test_no_root(void) {
   ASSERT_TRUE(SS_ABOVE > 0); /* information, not a failure */
   /* EVIDENCE: stickslip.h ss_trig_first_root: SS_EINVAL only for bad
    * arguments (NULL, n outside 0..SS_TRIG_MAX, t0 not finite, tmax not above
-   * t0) */
+   * t0, a coefficient or frequency not finite) */
   g.c0 = -1;
   ASSERT_EQ_INT(ss_trig_first_root(&g, 1, 1, &t), SS_EINVAL);
   ASSERT_EQ_INT(ss_trig_first_root(&g, 2, 1, &t), SS_EINVAL);
@@ -203,6 +203,26 @@ static void test_no_root(void) {
   g.c0 = -1;
   g.n = SS_TRIG_MAX + 1;
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 10, &t), SS_EINVAL);
+  /* a coefficient or frequency not finite: SS_EINVAL, not a root at t0 */
+  {
+    ss_trig h = {0};
+    h.c0 = -1;
+    h.n = 1;
+    h.w[0] = 1;
+    h.b[0] = 2; /* -1 + 2 sin t: a root at pi / 6 */
+    ASSERT_EQ_INT(ss_trig_first_root(&h, 0, 10, &t), SS_OK);
+    h.c0 = NAN;
+    ASSERT_EQ_INT(ss_trig_first_root(&h, 0, 10, &t), SS_EINVAL);
+    h.c0 = -1;
+    h.c1 = INFINITY;
+    ASSERT_EQ_INT(ss_trig_first_root(&h, 0, 10, &t), SS_EINVAL);
+    h.c1 = 0;
+    h.b[0] = NAN;
+    ASSERT_EQ_INT(ss_trig_first_root(&h, 0, 10, &t), SS_EINVAL);
+    h.b[0] = 2;
+    h.w[0] = INFINITY;
+    ASSERT_EQ_INT(ss_trig_first_root(&h, 0, 10, &t), SS_EINVAL);
+  }
   g.n = -1;
   ASSERT_EQ_INT(ss_trig_first_root(&g, 0, 10, &t), SS_EINVAL);
 }
