@@ -1143,8 +1143,9 @@ typedef struct ss_map_opts {
   unsigned kinds; /**< mask of ss_orbit_kind; 0 means all */
   int max_period; /**< as in ss_orbit_opts (0: 4) */
   int effort;     /**< of the full searches, as in ss_orbit_opts (0: 2) */
-  /** The full search runs at every search_every-th cell along each axis
-   *  (and the last), at every cell into which a neighbour's orbit does not
+  /** The full search runs on a lattice of cells spread evenly along each
+   *  axis from the first to the last, at most search_every apart, at every
+   *  cell into which a neighbour's orbit does not
    *  continue and which has no orbit of that sequence, and, when
    *  search_every is 1, everywhere (see no_edge_search).  0: 8. */
   int search_every;

@@ -3,7 +3,7 @@
  *
  * A full search (ss_orbit_find) costs milliseconds; a solve from a guess
  * tens of microseconds.  So the full search runs on a lattice of cells
- * (every search_every-th along each axis, and the last), and every orbit
+ * (spread evenly along each axis, at most search_every apart), and every orbit
  * found anywhere is then continued into each neighbouring cell as a guess
  * (ss_orbit_find from a guess: solved, checked feasible, a repetition of a
  * shorter orbit reduced to it).  A cell that gains an orbit puts its
@@ -49,6 +49,18 @@ typedef struct mapper {
   double t_start;
   int stopped;
 } mapper;
+
+/* Whether index i of an axis of n cells is on the lattice of full
+ * searches: m + 1 indices spread evenly from the first to the last, m =
+ * ceil((n - 1) / every), so that none is more than every apart (as many
+ * as every-th and the last would be, without the last two side by side). */
+static int on_lattice(int i, int n, int every) {
+  if (n <= 1)
+    return 1;
+  long span = n - 1, m = (span + every - 1) / every;
+  long k = (i * m + span / 2) / span; /* the nearest lattice index */
+  return (k * span + m / 2) / m == i;
+}
 
 double ss_map_value(const ss_map_axis *a, int i) {
   if (a->n <= 1)
@@ -463,8 +475,7 @@ int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
   int n0 = n_axes == 2 ? axes[0].n : 1, n1 = map->axes[1].n;
   for (int i = 0; i < n0 && todo; i++)
     for (int j = 0; j < n1; j++)
-      if ((n_axes == 1 || i % every == 0 || i == n0 - 1) &&
-          (j % every == 0 || j == n1 - 1))
+      if ((n_axes == 1 || on_lattice(i, n0, every)) && on_lattice(j, n1, every))
         todo[n_todo++] = i * n1 + j;
   if (rc == SS_OK)
     rc = search_cells(&mp, todo, n_todo, d);

@@ -247,10 +247,35 @@ static void test_threads(void) {
   ss_map_free(&b);
 }
 
+/* EVIDENCE: README "POST /map": the lattice of full searches is spread
+ * evenly from the first cell to the last, at most search_every apart: on a
+ * sweep where no orbit exists (ur below the overshoot family's grazing, so
+ * no search where a family ends), the complete cells are the lattice. */
+static void test_lattice(void) {
+  ss_params base = {0.2, 4, 0.0724, 0.6178, 1};
+  ss_map_axis ax = {SS_PARAM_UR, 0.3, 0.5, 50};
+  ss_map_opts mo;
+  memset(&mo, 0, sizeof mo);
+  mo.kinds = SS_ORBIT_OVERSHOOT;
+  ss_map map;
+  ASSERT_EQ_INT(ss_map_run(&base, 1, &ax, &mo, &map, NULL), SS_OK);
+  static const int want[] = {0, 7, 14, 21, 28, 35, 42, 49};
+  int k = 0, ok = map.n_cells == 50;
+  for (int c = 0; c < map.n_cells && ok; c++) {
+    ok = map.cells[c].n_orbits == 0;
+    if (map.cells[c].complete)
+      ok = ok && k < 8 && want[k++] == c;
+  }
+  ASSERT_TRUE(ok && k == 8);
+  ASSERT_EQ_INT(map.searches, 8);
+  ss_map_free(&map);
+}
+
 int main(int argc, char **argv) {
   const char *env = getenv("SS_MAP_N");
   int N = env ? atoi(env) : argc > 1 ? atoi(argv[1]) : 12;
   test_sweep();
+  test_lattice();
   test_threads();
   test_grid(N < 3 ? 3 : N);
   TEST_DONE();
