@@ -283,25 +283,36 @@ static ss_margin smallest_margin(const ss_orbit *o, const char **name) {
 
 /* The orbit at y: feasibility (ss_orbit_check) and stability.  SS_OK,
  * SS_INFEASIBLE (reason in d), or a failure. */
+/* The model and the orbit (modes, durations, start z0 from the duration
+ * equations) at the family's point y, unchecked.  *no_model: the
+ * parameter's value gives no model (then the rest is not filled). */
+static int orbit_at(const cont *c, const double *y, ss_model *m, ss_orbit *o,
+                    int *no_model) {
+  double F[SS_MAX_PHASES];
+  memset(o, 0, sizeof *o);
+  *no_model = model_at(c, value_of(c, y), m) != SS_OK;
+  if (*no_model)
+    return SS_EDOMAIN;
+  o->n_phases = c->n;
+  o->kind = ss_orbit_kind_of(c->n, c->modes);
+  for (int k = 0; k < c->n; k++) {
+    o->modes[k] = c->modes[k];
+    o->durations[k] = c->T * y[k];
+  }
+  return ss_orbit_equations(m, c->n, c->modes, o->durations, o->z0, F, NULL);
+}
+
 static int point_at(const cont *c, const double *y, double res,
                     ss_cont_point *pt, ss_diag *d) {
-  int n = c->n;
+  int n = c->n, no_model;
   ss_model m;
   ss_orbit o;
-  memset(&o, 0, sizeof o);
   memset(pt, 0, sizeof *pt);
   pt->value = value_of(c, y);
-  if (model_at(c, pt->value, &m) != SS_OK)
+  int rc = orbit_at(c, y, &m, &o, &no_model);
+  if (no_model)
     return ss__fail(d, SS_INFEASIBLE, cont_name(c), pt->value,
                     "the parameter left its domain");
-  o.n_phases = n;
-  o.kind = ss_orbit_kind_of(n, c->modes);
-  double F[SS_MAX_PHASES];
-  for (int k = 0; k < n; k++) {
-    o.modes[k] = c->modes[k];
-    o.durations[k] = c->T * y[k];
-  }
-  int rc = ss_orbit_equations(&m, n, c->modes, o.durations, o.z0, F, NULL);
   if (rc != SS_OK)
     return rc;
   if ((rc = ss_orbit_check(&m, &o, d)) != SS_OK)
@@ -508,13 +519,11 @@ static double end_slope(const ss_model *m, int n, const ss_mode *modes,
                         const double *tau, const double z0[4], int k) {
   double x[4], v[2];
   ss_trig ge;
-  ss_mode mode = modes[k], want = k + 1 < n ? modes[k + 1] : SS_MODE_SLIP;
   ss_z_to_x(m, z0, x);
   for (int j = 0; j < k; j++)
     ss_flow(m, modes[j], tau[j], x, x);
-  ss__switching(
-      m, mode, mode == SS_MODE_STICK ? (want == SS_MODE_OVERSHOOT ? -1 : 1) : 0,
-      x, &ge);
+  ss__end_switching(m, modes[k], k + 1 < n ? modes[k + 1] : SS_MODE_SLIP, x,
+                    &ge);
   ss_trig_eval(&ge, tau[k], 1, v);
   return v[1];
 }
@@ -523,14 +532,11 @@ static double end_slope(const ss_model *m, int n, const ss_mode *modes,
  * parameter or the equations fail). */
 static double slope_at(const cont *c, const double *y, int k) {
   ss_model m;
-  double tau[SS_MAX_PHASES], z0[4], F[SS_MAX_PHASES];
-  if (model_at(c, value_of(c, y), &m) != SS_OK)
+  ss_orbit o;
+  int no_model;
+  if (orbit_at(c, y, &m, &o, &no_model) != SS_OK)
     return NAN;
-  for (int j = 0; j < c->n; j++)
-    tau[j] = c->T * y[j];
-  if (ss_orbit_equations(&m, c->n, c->modes, tau, z0, F, NULL) != SS_OK)
-    return NAN;
-  return end_slope(&m, c->n, c->modes, tau, z0, k);
+  return end_slope(&m, c->n, c->modes, o.durations, o.z0, k);
 }
 
 /* Whether the orbit at the family's point y fails where a phase ends
@@ -540,18 +546,8 @@ static double slope_at(const cont *c, const double *y, int k) {
 static int tangential_failure(const cont *c, const double *y, int k) {
   ss_model m;
   ss_orbit o;
-  double F[SS_MAX_PHASES];
-  memset(&o, 0, sizeof o);
-  if (model_at(c, value_of(c, y), &m) != SS_OK)
-    return 0;
-  o.n_phases = c->n;
-  o.kind = ss_orbit_kind_of(c->n, c->modes);
-  for (int j = 0; j < c->n; j++) {
-    o.modes[j] = c->modes[j];
-    o.durations[j] = c->T * y[j];
-  }
-  if (ss_orbit_equations(&m, c->n, c->modes, o.durations, o.z0, F, NULL) !=
-      SS_OK)
+  int no_model;
+  if (orbit_at(c, y, &m, &o, &no_model) != SS_OK)
     return 0;
   if (ss_orbit_check(&m, &o, NULL) == SS_OK) {
     ss_stab_opts so = {o.n_turns, 0};

@@ -27,6 +27,11 @@ void ss__modal(const ss_model *m, const double zb[4], double q[2],
 void ss__switching(const ss_model *m, ss_mode mode, int sign, const double x[4],
                    ss_trig *g);
 
+/* The switching function that ends a phase of @a mode followed by @a next:
+ * a stick's side is the next mode's (+ur into slip, -ur into overshoot). */
+void ss__end_switching(const ss_model *m, ss_mode mode, ss_mode next,
+                       const double x[4], ss_trig *g);
+
 /* The motion in @a mode from the anchor state x, coordinate by coordinate
  * (x1, x2, x1', x2'), as functions of local time: free oscillations are two
  * modal terms about their equilibrium, the stick is a line plus one term

@@ -304,6 +304,13 @@ void ss_transition(const ss_model *m, ss_mode mode, double t, double A[16],
   }
 }
 
+void ss__end_switching(const ss_model *m, ss_mode mode, ss_mode next,
+                       const double x[4], ss_trig *g) {
+  ss__switching(
+      m, mode, mode == SS_MODE_STICK ? (next == SS_MODE_OVERSHOOT ? -1 : 1) : 0,
+      x, g);
+}
+
 void ss__switching(const ss_model *m, ss_mode mode, int sign, const double x[4],
                    ss_trig *g) {
   memset(g, 0, sizeof *g);

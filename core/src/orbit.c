@@ -457,10 +457,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
        * crossing */
       ss_trig ge;
       double v[2];
-      ss__switching(m, mode,
-                    mode == SS_MODE_STICK ? (want == SS_MODE_OVERSHOOT ? -1 : 1)
-                                          : 0,
-                    xs, &ge);
+      ss__end_switching(m, mode, want, xs, &ge);
       ss_trig_eval(&ge, tau, 1, v);
       margin_set(&o->transversal, v[1], k, tau);
       g_end = v[0];
