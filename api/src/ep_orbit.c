@@ -22,6 +22,8 @@ typedef struct orbit_x {
   int samples_object;      /* given as the object */
   long long effort, max_period;
   int finite_difference;
+  int certify;
+  double certify_seconds;
   /* for the core, dimensionless */
   ss_model m;
   ss_orbit_opts opts;
@@ -79,6 +81,10 @@ static const api_field FIELDS[] = {
      offsetof(orbit_x, max_period)},
     {"finite_difference", API_T_BOOL, API_DEFAULT, 0, 0, NULL,
      offsetof(orbit_x, finite_difference)},
+    {"certify", API_T_BOOL, API_DEFAULT, 0, 0, NULL,
+     offsetof(orbit_x, certify)},
+    {"certify_seconds", API_T_NUMBER, API_DEFAULT, 0.01, 3600, NULL,
+     offsetof(orbit_x, certify_seconds)},
 };
 static const api_spec SPEC = API_SPEC(FIELDS);
 
@@ -97,6 +103,8 @@ static void to_core(orbit_x *x, const api_limits *lim) {
   o->max_period = (int)x->max_period;
   o->difference_check = x->finite_difference;
   o->max_seconds = lim->max_seconds;
+  o->certify = x->certify;
+  o->certify_seconds = x->certify_seconds;
 }
 
 /* The client's hang-up, as the server reports it, stops the search. */
@@ -115,9 +123,14 @@ int ep_orbit_decode(const json_t *root, const api_call *c, void **xp) {
   x->effort = 2;
   x->max_period = 4;
   x->finite_difference = 1;
+  x->certify_seconds = 10;
   if (api__decode_request(&SPEC, root, x, &x->ap, c) ||
       (x->has_guess && api__guess_modes(&x->guess, "/guess", c)))
     return -1;
+  if (x->has_guess && x->certify)
+    return api__fail(c->e, API_P_INVALID_VALUE, "/certify",
+                     "/certify proves what the search without a guess "
+                     "finds; leave out /guess or /certify");
   to_core(x, c->lim);
   cancel_hook(&x->opts, c);
   return api__model(&x->m, &x->ap, c);
@@ -260,6 +273,37 @@ static json_t *rejected_json(const ss_orbit_report *rep, const api_params *ap) {
   return j;
 }
 
+/* What the certificate of a period-1 family proved, and in which box. */
+static json_t *cert_json(const ss_family_cert *fc, const api_params *ap) {
+  json_t *j = json_object(), *box = json_object(), *d = json_array();
+  api__set(j, "complete", json_boolean(fc->complete));
+  for (int k = 0; k < fc->n_phases; k++)
+    json_array_append_new(
+        d, api__vec((double[2]){api__time_out(ap, fc->duration_lo[k]),
+                                api__time_out(ap, fc->duration_hi[k])},
+                    2));
+  api__set(box, "durations", d);
+  double lo[4] = {fc->x1_lo, 0, fc->v1_lo, 0},
+         hi[4] = {fc->x1_hi, 0, fc->v1_hi, 0};
+  json_t *l = api__state(ap, lo), *h = api__state(ap, hi);
+  api__set(box, "x1",
+           json_pack("[OO]", json_array_get(l, 0), json_array_get(h, 0)));
+  api__set(box, "v1",
+           json_pack("[OO]", json_array_get(l, 2), json_array_get(h, 2)));
+  json_decref(l);
+  json_decref(h);
+  api__set(j, "box", box);
+  api__set(j, "roots", json_integer(fc->roots));
+  api__set(j, "orbits", json_integer(fc->orbits));
+  api__set(j, "rejected", json_integer(fc->rejected));
+  api__set(j, "added", json_integer(fc->added));
+  api__set(j, "boxes", json_integer(fc->boxes));
+  api__set(j, "seconds", api__real(fc->seconds));
+  if (!fc->complete)
+    api__set(j, "reason", json_string(fc->why));
+  return j;
+}
+
 static json_t *search_json(const orbit_x *x) {
   const ss_orbit_report *rep = &x->rep;
   json_t *se = json_object();
@@ -277,6 +321,16 @@ static json_t *search_json(const orbit_x *x) {
              api__real(api__time_out(&x->ap, rep->scan_box)));
     api__set(sc, "step", api__real(api__time_out(&x->ap, rep->scan_step)));
     api__set(se, "scan", sc);
+  }
+  /* asked for: the families' certificates ("complete": false with the
+   * reason where one was not made) */
+  if (x->certify) {
+    json_t *ce = json_object();
+    const char *name[2] = {"stick-slip", "overshoot"};
+    for (int f = 0; f < 2; f++)
+      if (rep->cert[f].ran)
+        api__set(ce, name[f], cert_json(&rep->cert[f], &x->ap));
+    api__set(se, "certificate", ce);
   }
   return se;
 }

@@ -566,11 +566,13 @@ typedef enum ss_orbit_source {
   SS_SOURCE_GUESS = 0,         /**< from the caller's guess */
   SS_SOURCE_SIMULATION = 1,    /**< simulation settled on it (an attractor) */
   SS_SOURCE_DURATION_GRID = 2, /**< Newton on the durations from a grid */
-  SS_SOURCE_MAP_NEWTON = 3     /**< Newton on the Poincare map P^k */
+  SS_SOURCE_MAP_NEWTON = 3,    /**< Newton on the Poincare map P^k */
+  SS_SOURCE_CERTIFICATE = 4    /**< a root the certificate proved (one the
+                                    other sources missed) */
 } ss_orbit_source;
 
-/** "guess", "simulation", "duration-grid", "poincare-newton"; NULL for
- *  anything else. */
+/** "guess", "simulation", "duration-grid", "poincare-newton",
+ *  "certificate"; NULL for anything else. */
 SS_API const char *ss_orbit_source_name(ss_orbit_source s);
 
 /** Options of ss_stability() and ss_orbit_solve(); zero-initialise for the
@@ -671,7 +673,39 @@ typedef struct ss_orbit_opts {
    *  answer stops the search with SS_ECANCELED.  NULL: never. */
   int (*cancelled)(void *cls);
   void *cancel_cls; /**< its argument */
+  /** 1: prove that the slip-stick and slip-overshoot-stick period-1 orbits
+   *  returned are all there are in a box of durations and start states
+   *  (ss_orbit_report.cert); an orbit the proof finds and the search missed
+   *  is added.  Costly: seconds per family (see the README). */
+  int certify;
+  /** The proof's budget per family, in seconds (0: 10); past it the family
+   *  is said not complete. */
+  double certify_seconds;
 } ss_orbit_opts;
+
+/** What the certificate of one period-1 family proved
+ *  (ss_orbit_opts.certify).  The box: the slip's duration in
+ *  [duration_lo[0], duration_hi[0]], each other phase's in [0,
+ *  duration_hi[k]], and the start on Sigma0 with x1 in [x1_lo, x1_hi] and
+ *  x1' in [v1_lo, v1_hi].  Interval branch and bound with the Krawczyk
+ *  test proves each root of the family's duration equations there unique in
+ *  a box of its own and excludes the rest; each root is then an orbit
+ *  (returned) or not (ss_orbit_check() fails, or a duration is not
+ *  positive). */
+typedef struct ss_family_cert {
+  int ran;      /**< 1: the proof was attempted for this family */
+  int complete; /**< 1: every orbit of the family in the box is returned */
+  int n_phases; /**< 2 slip-stick, 3 slip-overshoot-stick */
+  double duration_lo[3], duration_hi[3];
+  double x1_lo, x1_hi, v1_lo, v1_hi;
+  int roots;    /**< roots of the duration equations proved in the box */
+  int orbits;   /**< of them feasible orbits, all returned */
+  int rejected; /**< of them not orbits */
+  int added;    /**< orbits the other sources had missed, added */
+  long boxes;   /**< boxes tested */
+  double seconds;
+  char why[192]; /**< when not complete: what was left */
+} ss_family_cert;
 
 /** What the search did. */
 typedef struct ss_orbit_report {
@@ -692,6 +726,8 @@ typedef struct ss_orbit_report {
    *  its margins, when a root was rejected. */
   int has_rejected;
   ss_orbit rejected;
+  /** With ss_orbit_opts.certify: [0] slip-stick, [1] slip-overshoot-stick */
+  ss_family_cert cert[2];
 } ss_orbit_report;
 
 /**

@@ -37,7 +37,7 @@ const char *ss_orbit_kind_name(ss_orbit_kind k) {
 
 const char *ss_orbit_source_name(ss_orbit_source s) {
   static const char *const names[] = {"guess", "simulation", "duration-grid",
-                                      "poincare-newton"};
+                                      "poincare-newton", "certificate"};
   return (unsigned)s < sizeof names / sizeof names[0] ? names[s] : NULL;
 }
 

@@ -13,6 +13,7 @@
  *     orbits of other sequences and periods.
  */
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -171,6 +172,173 @@ static void try_solve(collect *c, int n, const ss_mode *modes,
     c->rep->infeasible++;
     keep_rejected(c->rep, &o, &d);
   }
+}
+
+/* The certificate of a period-1 family (f = 0 slip-stick, 1
+ * slip-overshoot-stick): every root of its duration equations in the box
+ * proved (certify.c), each judged an orbit or not by ss_orbit_check(), an
+ * orbit missing from the search's solved and added, and every orbit of the
+ * family the search returned inside the box found among the roots. */
+#define CERT_STATE_BOX 100.0 /* the start box, in units of max(V, ur/chi) */
+#define CERT_SLIP_MIN 1e-2   /* the slip's least duration, in fast periods */
+
+typedef struct cert_cls {
+  collect *c;
+  double t_end;
+} cert_cls;
+
+static int cert_stop(void *cls) {
+  cert_cls *cc = cls;
+  return over_budget(cc->c) || ss__now() > cc->t_end;
+}
+
+static int in_root(const ss__cert_root *r, const double *u) {
+  for (int i = 0; i < 4; i++) {
+    double e = 1e-9 * (1 + fabs(u[i]));
+    if (!(u[i] >= r->box.lo[i] - e && u[i] <= r->box.hi[i] + e))
+      return 0;
+  }
+  return 1;
+}
+
+static void certify_family(collect *c, int f, double dmax, double seconds,
+                           ss_family_cert *fc) {
+  const ss_model *m = c->m;
+  const ss_params *p = &m->p;
+  static const ss_mode seq[2][3] = {
+      {SS_MODE_SLIP, SS_MODE_STICK, SS_MODE_STICK},
+      {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK}};
+  int n = 2 + f;
+  double L = CERT_STATE_BOX * fmax(p->V, p->ur / p->chi);
+  double tlo = CERT_SLIP_MIN * SS_TWO_PI / m->w[1];
+  /* the phases after the slip reach a little below zero, so that a root
+   * with such a phase of length zero lies inside and is proved (and
+   * rejected), not left on the face */
+  double below = -1e-3 * dmax;
+  memset(fc, 0, sizeof *fc);
+  fc->ran = 1;
+  fc->n_phases = n;
+  fc->duration_lo[0] = tlo;
+  for (int k = 0; k < n; k++)
+    fc->duration_hi[k] = dmax;
+  fc->x1_lo = m->d0[0] - L;
+  fc->x1_hi = m->d0[0] + L;
+  fc->v1_lo = -L;
+  fc->v1_hi = L;
+  double lo[4] = {tlo, below, fc->x1_lo, fc->v1_lo};
+  double hi[4] = {dmax, dmax, fc->x1_hi, fc->v1_hi};
+  double t0 = ss__now();
+  cert_cls cc = {c, t0 + seconds};
+  ss__certificate ce;
+  int rc = ss__certify_period1(m, n, lo, hi, below, dmax, LONG_MAX, cert_stop,
+                               &cc, &ce);
+  fc->boxes = ce.boxes;
+  fc->roots = ce.n_roots;
+  if (rc == SS_ENOMEM || rc == SS_EINVAL) {
+    snprintf(fc->why, sizeof fc->why, "the proof could not run (%s)",
+             ss_strerror(rc));
+    ss__certificate_free(&ce);
+    fc->seconds = ss__now() - t0;
+    return;
+  }
+  int complete = ce.complete;
+  if (rc == SS_ECANCELED)
+    snprintf(fc->why, sizeof fc->why,
+             "the proof ran out of its %g s budget after %ld boxes", seconds,
+             ce.boxes);
+  else if (ce.n_undecided)
+    snprintf(fc->why, sizeof fc->why,
+             "%d boxes not decided, the first at durations [%.9g, %.9g] x "
+             "[%.9g, %.9g] (a double root, or one on the box's face)",
+             ce.n_undecided, ce.undecided.lo[0], ce.undecided.hi[0],
+             ce.undecided.lo[1], ce.undecided.hi[1]);
+  /* each root: an orbit, returned, or not one */
+  for (int r = 0; r < ce.n_roots; r++) {
+    const ss__cert_root *q = &ce.roots[r];
+    double u[4], tau[3], st;
+    ss__cert_polish(m, n, q, u);
+    ss__cert_point(m, n, u, NULL, &st);
+    tau[0] = u[0];
+    tau[1] = u[1];
+    tau[2] = st;
+    int positive = 1;
+    for (int k = 0; k < n; k++)
+      positive = positive && tau[k] > 0;
+    if (!positive) {
+      fc->rejected++;
+      continue;
+    }
+    ss_orbit o;
+    memset(&o, 0, sizeof o);
+    o.kind = f ? SS_ORBIT_OVERSHOOT : SS_ORBIT_STICKSLIP;
+    o.n_phases = n;
+    memcpy(o.modes, seq[f], sizeof o.modes[0] * (size_t)n);
+    memcpy(o.durations, tau, sizeof tau[0] * (size_t)n);
+    double x0[4] = {u[2], u[2] + p->ur / p->chi, u[3], p->V};
+    ss_x_to_z(m, x0, o.z0);
+    ss_diag dd;
+    ss_diag_clear(&dd);
+    int ck = ss_orbit_check(m, &o, &dd);
+    if (ck == SS_INFEASIBLE) {
+      fc->rejected++;
+      continue;
+    }
+    if (ck != SS_OK) {
+      complete = 0;
+      snprintf(fc->why, sizeof fc->why,
+               "the root at durations %.9g, %.9g could not be checked: %.96s",
+               tau[0], tau[1], dd.text);
+      continue;
+    }
+    fc->orbits++;
+    int known = 0;
+    for (int i = 0; i < c->n && !known; i++) {
+      const ss_orbit *b = &c->out[i];
+      known = b->n_phases == n && b->n_turns == 1;
+      for (int k = 0; k < n && known; k++)
+        known = b->modes[k] == seq[f][k] &&
+                fabs(b->durations[k] - tau[k]) < 1e-7 * (1 + b->period);
+    }
+    if (known)
+      continue;
+    int before = c->n, trunc = c->rep->truncated;
+    try_solve(c, n, seq[f], tau, SS_SOURCE_CERTIFICATE);
+    if (c->n > before) {
+      fc->added++;
+    } else if (c->rep->truncated > trunc) {
+      complete = 0;
+      snprintf(fc->why, sizeof fc->why, "more orbits than room in the answer");
+    } else {
+      complete = 0;
+      snprintf(fc->why, sizeof fc->why,
+               "the orbit proved at durations %.9g, %.9g did not solve "
+               "again",
+               tau[0], tau[1]);
+    }
+  }
+  /* every orbit of the family returned, inside the box, is a root */
+  for (int i = 0; i < c->n && ce.complete; i++) {
+    const ss_orbit *b = &c->out[i];
+    if (b->n_phases != n || b->n_turns != 1 || b->modes[1] != seq[f][1])
+      continue;
+    double u[4] = {b->durations[0], b->durations[1], b->x0[0], b->x0[2]};
+    int inside = u[0] >= tlo && u[0] <= dmax && u[1] <= dmax &&
+                 b->durations[n - 1] <= dmax && u[2] >= fc->x1_lo &&
+                 u[2] <= fc->x1_hi && u[3] >= fc->v1_lo && u[3] <= fc->v1_hi;
+    int found = 0;
+    for (int r = 0; r < ce.n_roots && !found; r++)
+      found = in_root(&ce.roots[r], u);
+    if (inside && !found) {
+      complete = 0;
+      snprintf(fc->why, sizeof fc->why,
+               "the orbit at durations %.9g, %.9g is not among the proved "
+               "roots",
+               u[0], u[1]);
+    }
+  }
+  fc->complete = complete;
+  ss__certificate_free(&ce);
+  fc->seconds = ss__now() - t0;
 }
 
 /* Newton on P^k(s) = s with the analytic Jacobian of the travelled
@@ -492,6 +660,33 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
             try_solve(&c, n, modes, dur, SS_SOURCE_MAP_NEWTON);
         }
       }
+  }
+  /* 4. the proof that nothing of the two period-1 families is missing */
+  if (opts->certify) {
+    double dmax = SS_SCAN_PERIODS * SS_TWO_PI / m->w[0];
+    double secs = opts->certify_seconds > 0 ? opts->certify_seconds : 10;
+    const unsigned kind[2] = {SS_ORBIT_STICKSLIP, SS_ORBIT_OVERSHOOT};
+    int left = !!(kinds & kind[0]) + !!(kinds & kind[1]);
+    for (int f = 0; f < 2; f++) {
+      if (!(kinds & kind[f]) || over_budget(&c))
+        continue;
+      /* within the search's own budget: a share of what is left of it, a
+       * tenth kept for the rest */
+      double s = secs;
+      if (c.budget > 0) {
+        double rest = 0.9 * c.budget - (ss__now() - c.t_start);
+        s = fmin(s, rest / left);
+      }
+      if (s > 0) {
+        certify_family(&c, f, dmax, s, &rep->cert[f]);
+      } else {
+        memset(&rep->cert[f], 0, sizeof rep->cert[f]);
+        rep->cert[f].ran = 1;
+        snprintf(rep->cert[f].why, sizeof rep->cert[f].why,
+                 "no time left for the proof in the search's budget");
+      }
+      left--;
+    }
   }
   /* keep only the kinds asked for */
   int w = 0;

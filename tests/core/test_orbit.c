@@ -341,7 +341,9 @@ static void test_public_api(void) {
                      "duration-grid") == 0);
   ASSERT_TRUE(strcmp(ss_orbit_source_name(SS_SOURCE_MAP_NEWTON),
                      "poincare-newton") == 0);
-  ASSERT_TRUE(ss_orbit_source_name((ss_orbit_source)4) == NULL);
+  ASSERT_TRUE(
+      strcmp(ss_orbit_source_name(SS_SOURCE_CERTIFICATE), "certificate") == 0);
+  ASSERT_TRUE(ss_orbit_source_name((ss_orbit_source)5) == NULL);
   ASSERT_TRUE(ss_orbit_source_name((ss_orbit_source)-1) == NULL);
 
   ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};

@@ -1,0 +1,883 @@
+/*
+ * certify.c: a proof of every root of the period-1 duration equations of
+ * the slip-stick and slip-overshoot-stick sequences in a box of durations,
+ * by interval branch and bound with the Krawczyk test.
+ *
+ * The equations are those of scan.c, with the start s = (x1, x1') on Sigma0
+ * eliminated through the two linear conditions on it and every residual
+ * multiplied by the determinant of that system, so that no division is left:
+ *   slip-stick (t1, t2):             Rn0 = Rn1 = 0;
+ *   slip-overshoot-stick (t1, t2, t3): det (x2 closure) = 0, Rn0 = Rn1 = 0,
+ * t3 the stick's duration, free here (scan.c divides it out).  Every term is
+ * a product of the modal sinusoids cos/sin(w_k t) of the slip and the
+ * overshoot, of cos/sin t of the stick, and of the stick's line V t.
+ *
+ * Interval arithmetic: every operation rounds outward (nextafter), sin and
+ * cos are widened by two ulps (glibc's are within one), and the modal data
+ * (frequencies, mode shapes, of ss_model) are taken as exact: the proof is
+ * of the closed forms that the solver itself evaluates.  Each quantity is
+ * carried with its gradient (forward differentiation in intervals), so one
+ * pass over a box X gives an enclosure F(X) and the Jacobian's J(X).
+ *
+ * A box is
+ *  - excluded when a residual's enclosure misses zero (the natural one or
+ *    the mean-value form F(c) + J(X)(X - c), intersected), or when the
+ *    Krawczyk image K(X) = c - Y F(c) + (I - Y J(X))(X - c), Y = mid(J)^-1,
+ *    misses X (every root in X lies in K(X));
+ *  - proved to hold exactly one root when K(X) lies inside X's interior;
+ *  - otherwise cut to X n K(X) and halved across its widest side, down to a
+ *    width where it is left undecided (a double root, a root on the box's
+ *    face, or a budget too small).
+ * Near t1 = 0 (and t2 = 0 for the overshoot) every residual vanishes with
+ * the determinant: the box starts at a positive lower bound there.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal.h"
+
+#define NV 4           /* unknowns: t1, t2, s1, s2 */
+#define STACK_MAX 512  /* boxes waiting (depth-first) */
+#define MIN_WIDTH 1e-9 /* relative to the box: below this, undecided */
+#define INFLATE_BELOW                                                          \
+  1e-3 /* relative width where a box is tried around                           \
+          Newton's point */
+#define NEWTON_ITERS 12
+#define STATE_WEIGHT 0.03 /* of the states' widths in the choice of a side */
+
+typedef struct iv {
+  double lo, hi;
+} iv;
+
+/* a value and its gradient in the unknowns */
+typedef struct ad {
+  iv v;
+  int n; /* d[i] is zero for i >= n */
+  iv d[NV];
+} ad;
+
+/* Outward rounding without a change of rounding mode: a result rounded to
+ * nearest is within |x| 2^-53 (plus 2^-1075 below the normal range) of the
+ * exact value, and x -+ (|x| 2^-52 + 2^-1074) rounded to nearest lies at
+ * least that far outside x. */
+static inline double dn(double x) {
+  return x - (fabs(x) * 0x1p-52 + 0x1p-1074);
+}
+static inline double up(double x) {
+  return x + (fabs(x) * 0x1p-52 + 0x1p-1074);
+}
+
+static inline iv iv_exact(double x) { return (iv){x, x}; }
+/* a double that stands for a real within an ulp of it */
+static inline iv iv_near(double x) { return (iv){dn(x), up(x)}; }
+
+static inline iv iv_add(iv a, iv b) {
+  return (iv){dn(a.lo + b.lo), up(a.hi + b.hi)};
+}
+
+static inline iv iv_sub(iv a, iv b) {
+  return (iv){dn(a.lo - b.hi), up(a.hi - b.lo)};
+}
+
+static inline iv iv_mul(iv a, iv b) {
+  if (a.lo == 0 && a.hi == 0)
+    return a;
+  if (b.lo == 0 && b.hi == 0)
+    return b;
+  double p[4] = {a.lo * b.lo, a.lo * b.hi, a.hi * b.lo, a.hi * b.hi};
+  double lo = p[0], hi = p[0];
+  for (int i = 1; i < 4; i++) {
+    lo = fmin(lo, p[i]);
+    hi = fmax(hi, p[i]);
+  }
+  /* inf * 0 (an unbounded box): unbounded, never an exclusion */
+  if (isnan(p[0]) || isnan(p[1]) || isnan(p[2]) || isnan(p[3]))
+    return (iv){-INFINITY, INFINITY};
+  return (iv){dn(lo), up(hi)};
+}
+
+static inline int iv_has_zero(iv a) { return !(a.lo > 0 || a.hi < 0); }
+static inline double iv_mid(iv a) { return 0.5 * a.lo + 0.5 * a.hi; }
+
+static ad ad_const(iv c) {
+  ad r;
+  r.v = c;
+  r.n = 0;
+  return r;
+}
+
+static ad ad_add(const ad *a, const ad *b) {
+  ad r;
+  r.v = iv_add(a->v, b->v);
+  r.n = a->n > b->n ? a->n : b->n;
+  for (int i = 0; i < r.n; i++)
+    r.d[i] = i >= a->n   ? b->d[i]
+             : i >= b->n ? a->d[i]
+                         : iv_add(a->d[i], b->d[i]);
+  return r;
+}
+
+static ad ad_sub(const ad *a, const ad *b) {
+  ad r;
+  r.v = iv_sub(a->v, b->v);
+  r.n = a->n > b->n ? a->n : b->n;
+  for (int i = 0; i < r.n; i++)
+    r.d[i] = i >= a->n   ? (iv){-b->d[i].hi, -b->d[i].lo}
+             : i >= b->n ? a->d[i]
+                         : iv_sub(a->d[i], b->d[i]);
+  return r;
+}
+
+static ad ad_mul(const ad *a, const ad *b) {
+  ad r;
+  r.v = iv_mul(a->v, b->v);
+  r.n = a->n > b->n ? a->n : b->n;
+  for (int i = 0; i < r.n; i++)
+    r.d[i] = i >= a->n   ? iv_mul(a->v, b->d[i])
+             : i >= b->n ? iv_mul(a->d[i], b->v)
+                         : iv_add(iv_mul(a->v, b->d[i]), iv_mul(a->d[i], b->v));
+  return r;
+}
+
+/* c a, c an interval constant */
+static ad ad_scale(iv c, const ad *a) {
+  ad r;
+  r.v = iv_mul(c, a->v);
+  r.n = a->n;
+  for (int i = 0; i < r.n; i++)
+    r.d[i] = iv_mul(c, a->d[i]);
+  return r;
+}
+
+/* a + c b */
+static ad ad_axpy(const ad *a, iv c, const ad *b) {
+  ad cb = ad_scale(c, b);
+  return ad_add(a, &cb);
+}
+
+/* cos over [lo, hi]: the ends, and 1 or -1 where a multiple of 2 pi or an
+ * odd multiple of pi lies inside (decided on a slightly widened interval:
+ * an extremum missed by a rounding is within 1e-15 of an end, where cos is
+ * flat to 1e-30) */
+static iv iv_cos(iv x) {
+  if (!(x.hi - x.lo < 6.0) || !isfinite(x.lo) || !isfinite(x.hi))
+    return (iv){-1, 1};
+  double a = cos(x.lo), b = cos(x.hi);
+  double lo = fmin(a, b), hi = fmax(a, b);
+  const double pi = 3.141592653589793;
+  double e = 4e-16 * fmax(fabs(x.lo), fabs(x.hi)) + 1e-300;
+  /* multiples of pi inside: k pi, k from ceil((lo - e)/pi) */
+  double k0 = ceil((x.lo - e) / pi), k1 = floor((x.hi + e) / pi);
+  for (double k = k0; k <= k1; k++) {
+    if (fmod(fabs(k), 2.0) == 0)
+      hi = 1;
+    else
+      lo = -1;
+  }
+  lo = dn(dn(lo)) - 1e-300;
+  hi = up(up(hi)) + 1e-300;
+  return (iv){fmax(lo, -1), fmin(hi, 1)};
+}
+
+static iv iv_sin(iv x) {
+  /* sin x = cos(x - pi/2); pi/2 as a double is within 6e-17 of it, which
+   * the widening of iv_cos covers */
+  const double h = 1.5707963267948966;
+  iv y = {dn(x.lo - h), up(x.hi - h)};
+  iv r = iv_cos(y);
+  r.lo = fmax(dn(r.lo - 1e-16), -1);
+  r.hi = fmin(up(r.hi + 1e-16), 1);
+  return r;
+}
+
+/* cos and sin of w t, w exact, t an unknown (or a function of one) */
+static void ad_cos_sin(double w, const ad *t, ad *c, ad *s) {
+  ad u = ad_scale(iv_exact(w), t);
+  iv cu = iv_cos(u.v), su = iv_sin(u.v);
+  iv ncs = {-su.hi, -su.lo};
+  c->v = cu;
+  s->v = su;
+  c->n = s->n = u.n;
+  for (int i = 0; i < u.n; i++) {
+    c->d[i] = iv_mul(ncs, u.d[i]);
+    s->d[i] = iv_mul(cu, u.d[i]);
+  }
+}
+
+/* a linear form over the basis {1, cos w0 t, sin w0 t, cos w1 t, sin w1 t}
+ * of a free oscillation */
+typedef struct lin {
+  iv c[5];
+} lin;
+
+static ad lin_at(const lin *L, const ad B[5]) {
+  ad r = ad_const(L->c[0]);
+  for (int k = 1; k < 5; k++)
+    r = ad_axpy(&r, L->c[k], &B[k]);
+  return r;
+}
+
+/* The free flow's transition in x: x(t) = A(t) (x0 - e) + e, e = sgn D.
+ * A = sum_k C_k cos w_k t + S_k sin w_k t, as linear forms. */
+static void flow_forms(const ss_model *m, lin A[4][4]) {
+  memset(A, 0, 16 * sizeof(lin));
+  for (int k = 0; k < 2; k++) {
+    iv w = iv_exact(m->w[k]);
+    iv winv = iv_near(1.0 / m->w[k]);
+    for (int i = 0; i < 2; i++)
+      for (int j = 0; j < 2; j++) {
+        iv p = iv_mul(iv_exact(m->phi[i][k]), iv_exact(m->phiinv[k][j]));
+        int ci = 1 + 2 * k, si = 2 + 2 * k;
+        A[i][j].c[ci] = p;                   /* pos <- pos */
+        A[i][j + 2].c[si] = iv_mul(p, winv); /* pos <- vel */
+        iv mpw = iv_mul(p, w);               /* vel <- pos */
+        A[i + 2][j].c[si] = (iv){-mpw.hi, -mpw.lo};
+        A[i + 2][j + 2].c[ci] = p; /* vel <- vel */
+      }
+  }
+}
+
+/* The problem of one box search. */
+typedef struct problem {
+  const ss_model *m;
+  int n;  /* 2: slip-stick, 3: slip-overshoot-stick (3 unknowns) */
+  int nv; /* unknowns */
+  /* slip from y0(s) = (s1, s1 + k, s2, V): x = Y s + y */
+  lin Y[4][2], y[4];
+  /* overshoot: x = G x0 + g */
+  lin G[4][4], g[4];
+  iv chi, k, V, chiV, chik, omc, Vinv;
+  double tau_lo, tau_hi; /* the range of the stick's duration */
+} problem;
+
+static void problem_init(problem *P, const ss_model *m, int n) {
+  memset(P, 0, sizeof *P);
+  P->m = m;
+  P->n = n;
+  P->nv = 4; /* t1, t2 (the stick's or the overshoot's), s1, s2 */
+  P->chi = iv_exact(m->p.chi);
+  P->V = iv_exact(m->p.V);
+  P->k = iv_near(m->p.ur / m->p.chi);
+  P->chiV = iv_mul(P->chi, P->V);
+  P->chik = iv_mul(P->chi, P->k);
+  P->omc = iv_sub(iv_exact(1), P->chi);
+  P->Vinv = iv_near(1 / m->p.V);
+  lin A[4][4];
+  flow_forms(m, A);
+  iv D[4] = {iv_exact(m->d0[0]), iv_exact(m->d0[1]), iv_exact(0), iv_exact(0)};
+  for (int i = 0; i < 4; i++)
+    for (int b = 0; b < 5; b++) {
+      P->Y[i][0].c[b] = iv_add(A[i][0].c[b], A[i][1].c[b]);
+      P->Y[i][1].c[b] = A[i][2].c[b];
+      /* y = A (k e2 + V e4 - D) + D */
+      iv s = iv_add(iv_mul(A[i][1].c[b], iv_sub(P->k, D[1])),
+                    iv_mul(A[i][3].c[b], P->V));
+      s = iv_sub(s, iv_mul(A[i][0].c[b], D[0]));
+      P->y[i].c[b] = s;
+      /* overshoot: x = A (x0 + D) - D */
+      for (int j = 0; j < 4; j++)
+        P->G[i][j].c[b] = A[i][j].c[b];
+      P->g[i].c[b] =
+          iv_add(iv_mul(A[i][0].c[b], D[0]), iv_mul(A[i][1].c[b], D[1]));
+    }
+  for (int i = 0; i < 4; i++) {
+    P->y[i].c[0] = iv_add(P->y[i].c[0], D[i]);
+    P->g[i].c[0] = iv_sub(P->g[i].c[0], D[i]);
+  }
+}
+
+static void basis(const ss_model *m, const ad *t, ad B[5]) {
+  B[0] = ad_const(iv_exact(1));
+  ad_cos_sin(m->w[0], t, &B[1], &B[2]);
+  ad_cos_sin(m->w[1], t, &B[3], &B[4]);
+}
+
+static ad ad_var(iv x, int i) {
+  ad r = ad_const(x);
+  r.n = i + 1;
+  for (int j = 0; j < i; j++)
+    r.d[j] = iv_exact(0);
+  r.d[i] = iv_exact(1);
+  return r;
+}
+
+/* The end of the free phases from y0(s), as rows over (s1, s2, 1): x[i] .
+ * (s1, s2, 1) is coordinate i at the end of the slip (slip-stick) or of
+ * the overshoot (slip-overshoot-stick); a, and b for the overshoot, the
+ * conditions x2' = V at the slip's and the overshoot's end. */
+typedef struct ends {
+  ad x[4][3];
+  ad a[3], b[3];
+} ends;
+
+static void free_ends(const problem *P, const iv *X, ends *e) {
+  const ss_model *m = P->m;
+  ad t1 = ad_var(X[0], 0), B1[5], B2[5];
+  basis(m, &t1, B1);
+  for (int i = 0; i < 4; i++) {
+    e->x[i][0] = lin_at(&P->Y[i][0], B1);
+    e->x[i][1] = lin_at(&P->Y[i][1], B1);
+    e->x[i][2] = lin_at(&P->y[i], B1);
+  }
+  ad Vc = ad_const(P->V);
+  e->a[0] = e->x[3][0];
+  e->a[1] = e->x[3][1];
+  e->a[2] = ad_sub(&e->x[3][2], &Vc);
+  ad t2 = ad_var(X[1], 1);
+  if (P->n == 2) {
+    /* the stick's end: x2 + V t2 = s1 + k */
+    ad one = ad_const(iv_exact(1)), kc = ad_const(P->k);
+    ad Vt = ad_scale(P->V, &t2);
+    e->b[0] = ad_sub(&e->x[1][0], &one);
+    e->b[1] = e->x[1][1];
+    e->b[2] = ad_add(&e->x[1][2], &Vt);
+    e->b[2] = ad_sub(&e->b[2], &kc);
+    return;
+  }
+  /* the overshoot's end, G x + g, x the slip's end */
+  ad y[4][3];
+  basis(m, &t2, B2);
+  for (int i = 0; i < 4; i++) {
+    ad gi = lin_at(&P->g[i], B2);
+    for (int c = 0; c < 3; c++)
+      y[i][c] = c == 2 ? gi : ad_const(iv_exact(0));
+    for (int l = 0; l < 4; l++) {
+      ad Gil = lin_at(&P->G[i][l], B2);
+      for (int c = 0; c < 3; c++) {
+        ad q = ad_mul(&Gil, &e->x[l][c]);
+        y[i][c] = ad_add(&y[i][c], &q);
+      }
+    }
+  }
+  memcpy(e->x, y, sizeof y);
+  e->b[0] = e->x[3][0];
+  e->b[1] = e->x[3][1];
+  e->b[2] = ad_sub(&e->x[3][2], &Vc);
+}
+
+static ad row_at(const ad *w, const ad *s1, const ad *s2) {
+  ad p = ad_mul(&w[0], s1), q = ad_mul(&w[1], s2);
+  p = ad_add(&p, &q);
+  return ad_add(&p, &w[2]);
+}
+
+/* The residuals over the box X = (t1, [t2,] s1, s2), with gradients, from
+ * the free phases' ends e: x2' = V at the end of each free phase, and the
+ * closure of (x1, x1') after the stick, whose duration the closure of x2
+ * gives, tau = (s1 + k - x2) / V (x2 at the stick's start):
+ *   R0 = chi (s1 + k) - s1 + Ac cos tau + Bc sin tau,
+ *   R1 = chi V - s2 - Ac sin tau + Bc cos tau,
+ * Ac = x1 - chi x2 and Bc = x1' - chi V at the stick's start.  *tau: its
+ * enclosure. */
+static void residuals_at(const problem *P, const ends *e, const iv *X, ad *F,
+                         iv *tau, ad *Erot) {
+  int nf = 0;
+  ad s1 = ad_var(X[2], 2), s2 = ad_var(X[3], 3);
+  F[nf++] = row_at(e->a, &s1, &s2);
+  F[nf++] = row_at(e->b, &s1, &s2);
+  ad x0 = row_at(e->x[0], &s1, &s2), x1 = row_at(e->x[1], &s1, &s2),
+     x2 = row_at(e->x[2], &s1, &s2);
+  ad t;
+  if (P->n == 2) {
+    t = ad_var(X[1], 1);
+  } else {
+    ad kc = ad_const(P->k);
+    t = ad_add(&s1, &kc);
+    t = ad_sub(&t, &x1);
+    t = ad_scale(P->Vinv, &t);
+  }
+  *tau = t.v;
+  ad co, si;
+  ad_cos_sin(1.0, &t, &co, &si);
+  ad Ac = ad_scale(P->chi, &x1);
+  Ac = ad_sub(&x0, &Ac);
+  ad cv = ad_const(P->chiV);
+  ad Bc = ad_sub(&x2, &cv);
+  if (Erot) {
+    /* the stick turns (Ac, Bc) into u = ((1 - chi) s1 - chi k, s2 - chi V),
+     * a rotation: |u|^2 - |(Ac, Bc)|^2 = 0, whatever its duration */
+    ad ck = ad_const(P->chik);
+    ad u0 = ad_scale(P->omc, &s1);
+    u0 = ad_sub(&u0, &ck);
+    ad u1 = ad_sub(&s2, &cv);
+    ad p0 = ad_mul(&u0, &u0), p1 = ad_mul(&u1, &u1), q0 = ad_mul(&Ac, &Ac),
+       q1 = ad_mul(&Bc, &Bc);
+    p0 = ad_add(&p0, &p1);
+    q0 = ad_add(&q0, &q1);
+    *Erot = ad_sub(&p0, &q0);
+  }
+  /* chi (s1 + k) - s1 = chi k - (1 - chi) s1 */
+  ad r0 = ad_scale(P->omc, &s1);
+  ad ck = ad_const(P->chik);
+  r0 = ad_sub(&ck, &r0);
+  ad p = ad_mul(&Ac, &co), q = ad_mul(&Bc, &si);
+  r0 = ad_add(&r0, &p);
+  F[nf++] = ad_add(&r0, &q);
+  ad r1 = ad_sub(&cv, &s2);
+  p = ad_mul(&Ac, &si);
+  q = ad_mul(&Bc, &co);
+  r1 = ad_sub(&r1, &p);
+  F[nf++] = ad_add(&r1, &q);
+}
+
+static void residuals(const problem *P, const iv *X, ad *F, iv *tau) {
+  ends e;
+  free_ends(P, X, &e);
+  residuals_at(P, &e, X, F, tau, NULL);
+}
+
+/* The inverse of the nv x nv matrix M (row-major, doubles) by Gauss-Jordan
+ * with partial pivoting; 0 if singular or not finite.  Any matrix serves
+ * as Krawczyk's preconditioner: this one need not be accurate. */
+static int invert(int nv, const double *M, double *I) {
+  double A[NV][2 * NV];
+  for (int i = 0; i < nv; i++)
+    for (int j = 0; j < nv; j++) {
+      A[i][j] = M[nv * i + j];
+      A[i][nv + j] = i == j;
+    }
+  for (int c = 0; c < nv; c++) {
+    int p = c;
+    for (int r = c + 1; r < nv; r++)
+      if (fabs(A[r][c]) > fabs(A[p][c]))
+        p = r;
+    if (!(A[p][c] != 0) || !isfinite(A[p][c]))
+      return 0;
+    for (int j = 0; j < 2 * nv; j++) {
+      double t = A[c][j];
+      A[c][j] = A[p][j];
+      A[p][j] = t;
+    }
+    double d = A[c][c];
+    for (int j = 0; j < 2 * nv; j++)
+      A[c][j] /= d;
+    for (int r = 0; r < nv; r++)
+      if (r != c && A[r][c] != 0) {
+        double f = A[r][c];
+        for (int j = 0; j < 2 * nv; j++)
+          A[r][j] -= f * A[c][j];
+      }
+  }
+  for (int i = 0; i < nv; i++)
+    for (int j = 0; j < nv; j++) {
+      I[nv * i + j] = A[i][nv + j];
+      if (!isfinite(I[nv * i + j]))
+        return 0;
+    }
+  return 1;
+}
+
+static iv iv_div(iv a, iv b) {
+  /* b does not hold zero */
+  iv r = {1 / b.hi, 1 / b.lo};
+  r = (iv){dn(r.lo), up(r.hi)};
+  return iv_mul(a, r);
+}
+
+/* Narrow s = (X[nt], X[nt + 1]) to the solutions of the linear conditions
+ * on it over the durations of X (m of them: a, and b for the overshoot):
+ * interval Gauss-Seidel, preconditioned by the inverse of the midpoint
+ * matrix when there are two.  0 when no s of X solves them. */
+static int contract_s(const ends *e, int m, iv *s) {
+  iv A[2][2], r[2];
+  const ad *w[2] = {e->a, e->b};
+  for (int i = 0; i < m; i++) {
+    A[i][0] = w[i][0].v;
+    A[i][1] = w[i][1].v;
+    r[i] = (iv){-w[i][2].v.hi, -w[i][2].v.lo};
+  }
+  if (m == 2) {
+    double M[4] = {iv_mid(A[0][0]), iv_mid(A[0][1]), iv_mid(A[1][0]),
+                   iv_mid(A[1][1])},
+           Y[4];
+    if (invert(2, M, Y)) {
+      iv PA[2][2], q[2];
+      for (int i = 0; i < 2; i++) {
+        iv y0 = iv_exact(Y[2 * i]), y1 = iv_exact(Y[2 * i + 1]);
+        q[i] = iv_add(iv_mul(y0, r[0]), iv_mul(y1, r[1]));
+        for (int j = 0; j < 2; j++)
+          PA[i][j] = iv_add(iv_mul(y0, A[0][j]), iv_mul(y1, A[1][j]));
+      }
+      memcpy(A, PA, sizeof A);
+      memcpy(r, q, sizeof r);
+    }
+  }
+  for (int sweep = 0; sweep < 2; sweep++)
+    for (int i = 0; i < m; i++)
+      for (int v = 0; v < 2; v++) {
+        /* row i solved for s[v] */
+        if (iv_has_zero(A[i][v]))
+          continue;
+        iv num = iv_sub(r[i], iv_mul(A[i][1 - v], s[1 - v]));
+        iv x = iv_div(num, A[i][v]);
+        if (isnan(x.lo) || isnan(x.hi))
+          continue;
+        double lo = fmax(s[v].lo, x.lo), hi = fmin(s[v].hi, x.hi);
+        if (lo > hi)
+          return 0;
+        s[v] = (iv){lo, hi};
+      }
+  return 1;
+}
+
+/* What one box is: 0 no root, 1 exactly one root (its enclosure into E),
+ * 2 not decided (X then cut to what may hold roots, K n X). */
+static int box_test(const problem *P, iv *X, iv *E) {
+  int nv = P->nv, nt = nv - 2;
+  ends e;
+  free_ends(P, X, &e);
+  if (!contract_s(&e, 2, &X[nt]))
+    return 0;
+  iv Xc[NV] = {{0, 0}}, tau, tauc;
+  for (int i = 0; i < nv; i++)
+    Xc[i] = iv_exact(iv_mid(X[i]));
+  ad FX[NV + 1], Fc[NV + 1];
+  residuals_at(P, &e, X, FX, &tau, &FX[nv]);
+  /* the stick's duration in its range */
+  if (P->n == 3 && (tau.lo > P->tau_hi || tau.hi < P->tau_lo))
+    return 0;
+  ends ec;
+  free_ends(P, Xc, &ec);
+  residuals_at(P, &ec, Xc, Fc, &tauc, &Fc[nv]);
+  /* exclusion by an enclosure of a residual or of the rotation condition:
+   * the natural one, or the mean-value form */
+  for (int r = 0; r <= nv; r++) {
+    const ad *fx = &FX[r];
+    iv v = Fc[r].v;
+    for (int j = 0; j < fx->n; j++)
+      v = iv_add(v, iv_mul(fx->d[j], iv_sub(X[j], Xc[j])));
+    if (!iv_has_zero(fx->v) || !iv_has_zero(v))
+      return 0;
+  }
+  /* Krawczyk */
+  double M[NV * NV], Yp[NV * NV];
+  for (int r = 0; r < nv; r++)
+    for (int j = 0; j < nv; j++)
+      M[nv * r + j] = iv_mid(FX[r].d[j]);
+  if (!invert(nv, M, Yp))
+    return 2;
+  iv K[NV];
+  int inside = 1, misses = 0;
+  for (int i = 0; i < nv; i++) {
+    /* c - Y F(c) */
+    iv v = Xc[i];
+    for (int r = 0; r < nv; r++)
+      v = iv_sub(v, iv_mul(iv_exact(Yp[nv * i + r]), Fc[r].v));
+    /* + (I - Y J) (X - c) */
+    for (int j = 0; j < nv; j++) {
+      iv a = iv_exact(i == j ? 1.0 : 0.0);
+      for (int r = 0; r < nv; r++)
+        a = iv_sub(a, iv_mul(iv_exact(Yp[nv * i + r]), FX[r].d[j]));
+      v = iv_add(v, iv_mul(a, iv_sub(X[j], Xc[j])));
+    }
+    if (isnan(v.lo) || isnan(v.hi))
+      return 2;
+    misses |= v.lo > X[i].hi || v.hi < X[i].lo;
+    inside = inside && v.lo > X[i].lo && v.hi < X[i].hi;
+    K[i] = v;
+  }
+  if (misses)
+    return 0;
+  if (inside) {
+    for (int i = 0; i < nv; i++)
+      E[i] = K[i];
+    return 1;
+  }
+  for (int i = 0; i < nv; i++) {
+    X[i].lo = fmax(X[i].lo, K[i].lo);
+    X[i].hi = fmin(X[i].hi, K[i].hi);
+  }
+  return 2;
+}
+
+/* Newton from the middle of X in floating point, for an approximate root
+ * to build a box around; 1 if it converged within reach of X. */
+static int newton_point(const problem *P, const iv *X, double *r) {
+  int nv = P->nv;
+  iv Xr[NV] = {{0, 0}};
+  double reach = 0;
+  for (int i = 0; i < nv; i++)
+    r[i] = iv_mid(X[i]);
+  for (int it = 0; it < NEWTON_ITERS; it++) {
+    for (int i = 0; i < nv; i++)
+      Xr[i] = iv_exact(r[i]);
+    ad F[NV];
+    iv tau;
+    residuals(P, Xr, F, &tau);
+    double M[NV * NV], Y[NV * NV], step = 0;
+    for (int i = 0; i < nv; i++)
+      for (int j = 0; j < nv; j++)
+        M[nv * i + j] = iv_mid(F[i].d[j]);
+    if (!invert(nv, M, Y))
+      return 0;
+    for (int i = 0; i < nv; i++) {
+      double d = 0;
+      for (int j = 0; j < nv; j++)
+        d -= Y[nv * i + j] * iv_mid(F[j].v);
+      r[i] += d;
+      step = fmax(step, fabs(d) / (X[i].hi - X[i].lo));
+    }
+    if (!(step < 4))
+      return 0;
+    if (step < 1e-6)
+      break;
+  }
+  for (int i = 0; i < nv; i++) {
+    double w = X[i].hi - X[i].lo;
+    reach = fmax(reach, fabs(r[i] - iv_mid(X[i])) / w);
+  }
+  return reach < 2;
+}
+
+/* A root proved unique in H, enclosed in E (within H): the same as a root
+ * already listed when one's enclosure lies in the other's box; -1 when
+ * they overlap but neither holds the other's (not decided), 0 new, 1 known. */
+static int known_root(const ss__certificate *c, int nv, const iv *H,
+                      const iv *E) {
+  for (int k = 0; k < c->n_roots; k++) {
+    const ss__cert_root *q = &c->roots[k];
+    int e_in_q = 1, qe_in_h = 1, meet = 1;
+    for (int i = 0; i < nv; i++) {
+      e_in_q = e_in_q && E[i].lo >= q->box.lo[i] && E[i].hi <= q->box.hi[i];
+      qe_in_h = qe_in_h && q->at.lo[i] >= H[i].lo && q->at.hi[i] <= H[i].hi;
+      meet = meet && E[i].lo <= q->box.hi[i] && E[i].hi >= q->box.lo[i];
+    }
+    if (e_in_q || qe_in_h)
+      return 1;
+    if (meet) {
+      /* E reaches into q's box, without lying in it: still two roots if
+       * q's enclosure and E are apart */
+      int apart = 0;
+      for (int i = 0; i < nv; i++)
+        apart |= E[i].lo > q->at.hi[i] || E[i].hi < q->at.lo[i];
+      if (!apart)
+        return -1;
+    }
+  }
+  return 0;
+}
+
+static int add_root(ss__certificate *c, int nv, const iv *H, const iv *E) {
+  int k = known_root(c, nv, H, E);
+  if (k != 0)
+    return k;
+  if (c->n_roots == c->cap_roots) {
+    int cap = c->cap_roots ? 2 * c->cap_roots : 16;
+    ss__cert_root *q = realloc(c->roots, (size_t)cap * sizeof *q);
+    if (!q)
+      return -2;
+    c->roots = q;
+    c->cap_roots = cap;
+  }
+  ss__cert_root *q = &c->roots[c->n_roots++];
+  memset(q, 0, sizeof *q);
+  for (int i = 0; i < nv; i++) {
+    q->box.lo[i] = H[i].lo;
+    q->box.hi[i] = H[i].hi;
+    q->at.lo[i] = fmax(E[i].lo, H[i].lo);
+    q->at.hi[i] = fmin(E[i].hi, H[i].hi);
+  }
+  return 0;
+}
+
+static void note_undecided(ss__certificate *c, int nv, const iv *X) {
+  if (c->n_undecided++ == 0)
+    for (int i = 0; i < nv; i++) {
+      c->undecided.lo[i] = X[i].lo;
+      c->undecided.hi[i] = X[i].hi;
+    }
+}
+
+int ss__certify_period1(const ss_model *m, int n, const double lo[4],
+                        const double hi[4], double stick_lo, double stick_hi,
+                        long max_boxes, int (*stop)(void *), void *stop_cls,
+                        ss__certificate *out) {
+  memset(out, 0, sizeof *out);
+  if ((n != 2 && n != 3) || !(stick_hi > stick_lo) || !isfinite(stick_lo) ||
+      !isfinite(stick_hi))
+    return SS_EINVAL;
+  problem P;
+  problem_init(&P, m, n);
+  P.tau_lo = stick_lo;
+  P.tau_hi = stick_hi;
+  int nv = P.nv;
+  double W[NV];
+  for (int i = 0; i < nv; i++) {
+    if (!(hi[i] > lo[i] && isfinite(hi[i]) && isfinite(lo[i])))
+      return SS_EINVAL;
+    W[i] = hi[i] - lo[i];
+  }
+  iv(*stack)[NV] = malloc(STACK_MAX * sizeof *stack);
+  if (!stack)
+    return SS_ENOMEM;
+  for (int i = 0; i < nv; i++)
+    stack[0][i] = (iv){lo[i], hi[i]};
+  int top = 1, rc = SS_OK;
+  while (top > 0) {
+    if (out->boxes >= max_boxes) {
+      out->budget_spent = 1;
+      break;
+    }
+    if (stop && (out->boxes & 1023) == 0 && stop(stop_cls)) {
+      rc = SS_ECANCELED;
+      break;
+    }
+    iv X[NV], E[NV];
+    memcpy(X, stack[--top], sizeof X);
+    out->boxes++;
+    int r = box_test(&P, X, E);
+    if (r == 0)
+      continue;
+    if (r == 1) {
+      int k = add_root(out, nv, X, E);
+      if (k == -2) {
+        rc = SS_ENOMEM;
+        break;
+      }
+      if (k == -1)
+        note_undecided(out, nv, X);
+      continue;
+    }
+    /* halve across the widest side, relative to the box's; the states
+     * (s1, s2) weigh less: they follow from the durations */
+    int w = 0;
+    double rel = 0;
+    for (int i = 0; i < nv; i++) {
+      double v = (X[i].hi - X[i].lo) / W[i] * (i >= nv - 2 ? STATE_WEIGHT : 1);
+      if (v > rel) {
+        rel = v;
+        w = i;
+      }
+    }
+    /* a small box that is not decided may hold a root near its face:
+     * prove it in a box around Newton's point that holds X */
+    if (rel < INFLATE_BELOW) {
+      double rp[NV];
+      if (newton_point(&P, X, rp)) {
+        iv H[NV], EH[NV];
+        for (int i = 0; i < nv; i++) {
+          double wi = X[i].hi - X[i].lo;
+          H[i].lo = fmin(X[i].lo, rp[i] - 0.25 * wi);
+          H[i].hi = fmax(X[i].hi, rp[i] + 0.25 * wi);
+        }
+        iv Hc[NV];
+        memcpy(Hc, H, sizeof H);
+        int rh = box_test(&P, Hc, EH);
+        if (rh == 0)
+          continue; /* H, and X in it, holds no root */
+        if (rh == 1) {
+          int k = add_root(out, nv, H, EH);
+          if (k == -2) {
+            rc = SS_ENOMEM;
+            break;
+          }
+          if (k == -1)
+            note_undecided(out, nv, X);
+          continue;
+        }
+      }
+    }
+    if (!((X[w].hi - X[w].lo) / W[w] > MIN_WIDTH) || top + 2 > STACK_MAX) {
+      note_undecided(out, nv, X);
+      continue;
+    }
+    double mid = iv_mid(X[w]);
+    memcpy(stack[top], X, sizeof X);
+    stack[top][w].hi = mid;
+    top++;
+    memcpy(stack[top], X, sizeof X);
+    stack[top][w].lo = mid;
+    top++;
+  }
+  if (top > 0 && rc == SS_OK)
+    out->budget_spent = 1;
+  out->complete = rc == SS_OK && !out->budget_spent && out->n_undecided == 0;
+  free(stack);
+  return rc;
+}
+
+void ss__cert_polish(const ss_model *m, int n, const ss__cert_root *r,
+                     double u[4]) {
+  problem P;
+  problem_init(&P, m, n);
+  iv X[NV] = {{0, 0}};
+  for (int i = 0; i < P.nv; i++)
+    X[i] = (iv){r->at.lo[i], r->at.hi[i]};
+  int nv = P.nv;
+  double v[NV];
+  for (int i = 0; i < nv; i++)
+    u[i] = v[i] = iv_mid(X[i]);
+  for (int it = 0; it < NEWTON_ITERS; it++) {
+    iv Xr[NV] = {{0, 0}};
+    ad F[NV];
+    iv tau;
+    double M[NV * NV] = {0}, Y[NV * NV];
+    for (int i = 0; i < nv; i++)
+      Xr[i] = iv_exact(v[i]);
+    residuals(&P, Xr, F, &tau);
+    for (int i = 0; i < nv; i++)
+      for (int j = 0; j < nv; j++)
+        M[nv * i + j] = iv_mid(F[i].d[j]);
+    if (!invert(nv, M, Y))
+      return;
+    double step = 0;
+    for (int i = 0; i < nv; i++) {
+      double d = 0;
+      for (int j = 0; j < nv; j++)
+        d -= Y[nv * i + j] * iv_mid(F[j].v);
+      v[i] += d;
+      step = fmax(step, fabs(d) / (1 + fabs(v[i])));
+    }
+    /* the root is the only one in its box: Newton must stay there */
+    for (int i = 0; i < nv; i++)
+      if (!(v[i] >= r->box.lo[i] && v[i] <= r->box.hi[i]))
+        return;
+    memcpy(u, v, sizeof v[0] * (size_t)nv);
+    if (step < 1e-15)
+      return;
+  }
+}
+
+void ss__certificate_free(ss__certificate *c) {
+  free(c->roots);
+  c->roots = NULL;
+  c->n_roots = c->cap_roots = 0;
+}
+
+void ss__cert_point(const ss_model *m, int n, const double *u, double *F,
+                    double *stick) {
+  problem P;
+  problem_init(&P, m, n);
+  iv X[NV] = {{0, 0}};
+  for (int i = 0; i < P.nv; i++)
+    X[i] = iv_exact(u[i]);
+  ad R[NV];
+  iv tau;
+  residuals(&P, X, R, &tau);
+  for (int i = 0; F && i < P.nv; i++)
+    F[i] = iv_mid(R[i].v);
+  *stick = iv_mid(tau);
+}
+
+void ss__cert_enclose(const ss_model *m, int n, const double lo[4],
+                      const double hi[4], double Flo[4], double Fhi[4],
+                      double Jlo[16], double Jhi[16]) {
+  problem P;
+  problem_init(&P, m, n);
+  iv X[NV] = {{0, 0}}, tau;
+  for (int i = 0; i < P.nv; i++)
+    X[i] = (iv){lo[i], hi[i]};
+  ad F[NV];
+  residuals(&P, X, F, &tau);
+  for (int r = 0; r < P.nv; r++) {
+    Flo[r] = F[r].v.lo;
+    Fhi[r] = F[r].v.hi;
+    for (int j = 0; j < P.nv; j++) {
+      iv d = j < F[r].n ? F[r].d[j] : iv_exact(0);
+      Jlo[P.nv * r + j] = d.lo;
+      Jhi[P.nv * r + j] = d.hi;
+    }
+  }
+}
