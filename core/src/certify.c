@@ -522,13 +522,78 @@ static int contract_s(const ends *e, int m, iv *s) {
   return 1;
 }
 
+/* Slip-stick only: the closure residuals with s eliminated, det [a; b; C]
+ * = C . (a x b), functions of the durations alone (the stick's duration is
+ * t2).  Where such a one keeps a sign over the box no root lies there, of
+ * any s: at a root with det != 0 it is det R = 0, and where a and b are
+ * parallel and have a common solution a x b = 0.  1 when excluded. */
+static void reduced_at(const problem *P, const ends *e, const iv *X, ad *R) {
+  ad sg[3];
+  for (int i = 0; i < 3; i++) {
+    int j = (i + 1) % 3, k = (i + 2) % 3;
+    ad p = ad_mul(&e->a[j], &e->b[k]), q = ad_mul(&e->a[k], &e->b[j]);
+    sg[i] = ad_sub(&p, &q);
+  }
+  ad t2 = ad_var(X[1], 1), co, si;
+  ad_cos_sin(1.0, &t2, &co, &si);
+  R[0] = R[1] = ad_const(iv_exact(0));
+  for (int c = 0; c < 3; c++) {
+    ad Ac = ad_scale(P->chi, &e->x[1][c]);
+    Ac = ad_sub(&e->x[0][c], &Ac);
+    ad Bc = e->x[2][c];
+    if (c == 2) {
+      ad cv = ad_const(P->chiV);
+      Bc = ad_sub(&Bc, &cv);
+    }
+    ad p = ad_mul(&Ac, &co), q = ad_mul(&Bc, &si);
+    ad r0 = ad_add(&p, &q);
+    p = ad_mul(&Ac, &si);
+    q = ad_mul(&Bc, &co);
+    ad r1 = ad_sub(&q, &p);
+    iv k0 = c == 0   ? (iv){-P->omc.hi, -P->omc.lo}
+            : c == 2 ? P->chik
+                     : iv_exact(0);
+    iv k1 = c == 1 ? iv_exact(-1) : c == 2 ? P->chiV : iv_exact(0);
+    ad c0 = ad_const(k0), c1 = ad_const(k1);
+    r0 = ad_add(&r0, &c0);
+    r1 = ad_add(&r1, &c1);
+    p = ad_mul(&r0, &sg[c]);
+    q = ad_mul(&r1, &sg[c]);
+    R[0] = ad_add(&R[0], &p);
+    R[1] = ad_add(&R[1], &q);
+  }
+}
+
+static int reduced_excludes(const problem *P, const ends *e, const iv *X) {
+  ad R[2], Rc[2];
+  reduced_at(P, e, X, R);
+  for (int r = 0; r < 2; r++)
+    if (!iv_has_zero(R[r].v))
+      return 1;
+  /* the mean-value form about the middle */
+  iv Xc[NV] = {{0, 0}};
+  for (int i = 0; i < 2; i++)
+    Xc[i] = iv_exact(iv_mid(X[i]));
+  ends ec;
+  free_ends(P, Xc, &ec);
+  reduced_at(P, &ec, Xc, Rc);
+  for (int r = 0; r < 2; r++) {
+    iv v = Rc[r].v;
+    for (int j = 0; j < 2 && j < R[r].n; j++)
+      v = iv_add(v, iv_mul(R[r].d[j], iv_sub(X[j], Xc[j])));
+    if (!iv_has_zero(v))
+      return 1;
+  }
+  return 0;
+}
+
 /* What one box is: 0 no root, 1 exactly one root (its enclosure into E),
  * 2 not decided (X then cut to what may hold roots, K n X). */
 static int box_test(const problem *P, iv *X, iv *E) {
   int nv = P->nv, nt = nv - 2;
   ends e;
   free_ends(P, X, &e);
-  if (!contract_s(&e, 2, &X[nt]))
+  if (!contract_s(&e, 2, &X[nt]) || (P->n == 2 && reduced_excludes(P, &e, X)))
     return 0;
   iv Xc[NV] = {{0, 0}}, tau, tauc;
   for (int i = 0; i < nv; i++)
@@ -551,8 +616,30 @@ static int box_test(const problem *P, iv *X, iv *E) {
     if (!iv_has_zero(fx->v) || !iv_has_zero(v))
       return 0;
   }
+  /* the closure residuals (and the rotation condition) less their
+   * dependence on s through the two linear conditions: G = R - la a - lb b,
+   * (la, lb) cancelling dG/ds at the middle.  s follows from the durations,
+   * so G's enclosure is nearly R's along the solutions, not over s's
+   * interval as if it were free of t */
+  double A[4] = {iv_mid(FX[0].d[nt]), iv_mid(FX[1].d[nt]),
+                 iv_mid(FX[0].d[nt + 1]), iv_mid(FX[1].d[nt + 1])},
+         Ai[4];
+  if (invert(2, A, Ai))
+    for (int r = 2; r <= nv; r++) {
+      double g0 = iv_mid(FX[r].d[nt]), g1 = iv_mid(FX[r].d[nt + 1]);
+      iv la = iv_exact(Ai[0] * g0 + Ai[1] * g1),
+         lb = iv_exact(Ai[2] * g0 + Ai[3] * g1);
+      iv v = iv_sub(iv_sub(Fc[r].v, iv_mul(la, Fc[0].v)), iv_mul(lb, Fc[1].v));
+      for (int j = 0; j < nv; j++) {
+        iv d = iv_sub(iv_sub(FX[r].d[j], iv_mul(la, FX[0].d[j])),
+                      iv_mul(lb, FX[1].d[j]));
+        v = iv_add(v, iv_mul(d, iv_sub(X[j], Xc[j])));
+      }
+      if (!iv_has_zero(v))
+        return 0;
+    }
   /* Krawczyk */
-  double M[NV * NV], Yp[NV * NV];
+  double M[NV * NV] = {0}, Yp[NV * NV];
   for (int r = 0; r < nv; r++)
     for (int j = 0; j < nv; j++)
       M[nv * r + j] = iv_mid(FX[r].d[j]);
