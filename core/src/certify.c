@@ -317,6 +317,8 @@ static ad ad_var(iv x, int i) {
 typedef struct ends {
   ad x[4][3];
   ad a[3], b[3];
+  /* slip-overshoot-stick: V times the stick's duration, c . (s1, s2, 1) */
+  ad c[3];
 } ends;
 
 static void free_ends(const problem *P, const iv *X, ends *e) {
@@ -359,6 +361,12 @@ static void free_ends(const problem *P, const iv *X, ends *e) {
     }
   }
   memcpy(e->x, y, sizeof y);
+  /* V t3 = s1 + k - x2 */
+  ad one = ad_const(iv_exact(1)), kc = ad_const(P->k),
+     zero = ad_const(iv_exact(0));
+  e->c[0] = ad_sub(&one, &e->x[1][0]);
+  e->c[1] = ad_sub(&zero, &e->x[1][1]);
+  e->c[2] = ad_sub(&kc, &e->x[1][2]);
   e->b[0] = e->x[3][0];
   e->b[1] = e->x[3][1];
   e->b[2] = ad_sub(&e->x[3][2], &Vc);
@@ -487,7 +495,8 @@ static iv iv_div(iv a, iv b) {
  * on it over the durations of X (m of them: a, and b for the overshoot):
  * interval Gauss-Seidel, preconditioned by the inverse of the midpoint
  * matrix when there are two.  0 when no s of X solves them. */
-static int contract_s(const ends *e, int m, iv *s) {
+static int contract_s(const problem *P, const ends *e, iv *s) {
+  int m = 2;
   iv A[2][2], r[2];
   const ad *w[2] = {e->a, e->b};
   for (int i = 0; i < m; i++) {
@@ -495,7 +504,7 @@ static int contract_s(const ends *e, int m, iv *s) {
     A[i][1] = w[i][1].v;
     r[i] = (iv){-w[i][2].v.hi, -w[i][2].v.lo};
   }
-  if (m == 2) {
+  {
     double M[4] = {iv_mid(A[0][0]), iv_mid(A[0][1]), iv_mid(A[1][0]),
                    iv_mid(A[1][1])},
            Y[4];
@@ -526,6 +535,25 @@ static int contract_s(const ends *e, int m, iv *s) {
           return 0;
         s[v] = (iv){lo, hi};
       }
+  /* slip-overshoot-stick: the stick's duration in its range, V t3 = c .
+   * (s, 1), bounds s along the direction the two conditions leave loose
+   * (where they are nearly parallel s is large, and so is t3) */
+  if (P->n == 3) {
+    iv rt = iv_sub(iv_mul(P->V, (iv){P->tau_lo, P->tau_hi}), e->c[2].v);
+    for (int sweep = 0; sweep < 2; sweep++)
+      for (int v = 0; v < 2; v++) {
+        if (iv_has_zero(e->c[v].v))
+          continue;
+        iv num = iv_sub(rt, iv_mul(e->c[1 - v].v, s[1 - v]));
+        iv x = iv_div(num, e->c[v].v);
+        if (isnan(x.lo) || isnan(x.hi))
+          continue;
+        double lo = fmax(s[v].lo, x.lo), hi = fmin(s[v].hi, x.hi);
+        if (lo > hi)
+          return 0;
+        s[v] = (iv){lo, hi};
+      }
+  }
   return 1;
 }
 
@@ -600,7 +628,7 @@ static int box_test(const problem *P, iv *X, iv *E) {
   int nv = P->nv, nt = nv - 2;
   ends e;
   free_ends(P, X, &e);
-  if (!contract_s(&e, 2, &X[nt]) || (P->n == 2 && reduced_excludes(P, &e, X)))
+  if (!contract_s(P, &e, &X[nt]) || (P->n == 2 && reduced_excludes(P, &e, X)))
     return 0;
   iv Xc[NV] = {{0, 0}}, tau, tauc;
   for (int i = 0; i < nv; i++)
