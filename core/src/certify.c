@@ -1,35 +1,46 @@
 /*
- * certify.c: a proof of every root of the period-1 duration equations of
- * the slip-stick and slip-overshoot-stick sequences in a box of durations,
- * by interval branch and bound with the Krawczyk test.
+ * certify.c: a proof of every root of the period-1 orbit equations of the
+ * slip-stick and slip-overshoot-stick sequences in a box, by interval branch
+ * and bound with the Krawczyk test.
  *
- * The equations are those of scan.c, with the start s = (x1, x1') on Sigma0
- * eliminated through the two linear conditions on it and every residual
- * multiplied by the determinant of that system, so that no division is left:
- *   slip-stick (t1, t2):             Rn0 = Rn1 = 0;
- *   slip-overshoot-stick (t1, t2, t3): det (x2 closure) = 0, Rn0 = Rn1 = 0,
- * t3 the stick's duration, free here (scan.c divides it out).  Every term is
- * a product of the modal sinusoids cos/sin(w_k t) of the slip and the
- * overshoot, of cos/sin t of the stick, and of the stick's line V t.
+ * Unknowns (t1, t2, s1, s2): the slip's duration, the next phase's (the
+ * stick of slip-stick, the overshoot of slip-overshoot-stick) and the start
+ * s = (x1, x1') on Sigma0, y0(s) = (s1, s1 + ur/chi, s2, V).  The free
+ * phases are affine in s, so each condition below is a row over (s1, s2, 1)
+ * whose entries are linear forms in the modal sinusoids cos/sin(w_k t):
+ *   a . (s, 1) = 0: x2' = V at the slip's end;
+ *   b . (s, 1) = 0: x2' = V at the overshoot's end, or for slip-stick the
+ *                   closure of x2, x2 + V t2 = s1 + ur/chi;
+ *   R0 = R1 = 0:    the closure of (x1, x1') after the stick, a rotation of
+ *                   (x1 - chi x2, x1' - chi V) by its duration (t2, or for
+ *                   slip-overshoot-stick t3 = (s1 + ur/chi - x2) / V).
+ * The start is an unknown of bounded range rather than eliminated: scan.c's
+ * elimination multiplies by the determinant of (a, b), and where a and b are
+ * parallel every residual vanishes at isolated points, roots "at infinity"
+ * that no interval method can decide.
  *
- * Interval arithmetic: every operation rounds outward (nextafter), sin and
- * cos are widened by two ulps (glibc's are within one), and the modal data
+ * Interval arithmetic: every operation rounds outward, sin and cos are
+ * widened by two ulps (glibc's are within one), and the modal data
  * (frequencies, mode shapes, of ss_model) are taken as exact: the proof is
  * of the closed forms that the solver itself evaluates.  Each quantity is
  * carried with its gradient (forward differentiation in intervals), so one
  * pass over a box X gives an enclosure F(X) and the Jacobian's J(X).
  *
  * A box is
- *  - excluded when a residual's enclosure misses zero (the natural one or
- *    the mean-value form F(c) + J(X)(X - c), intersected), or when the
- *    Krawczyk image K(X) = c - Y F(c) + (I - Y J(X))(X - c), Y = mid(J)^-1,
- *    misses X (every root in X lies in K(X));
+ *  - excluded when s has no value in it that solves a and b (interval
+ *    Gauss-Seidel, which also narrows it; for slip-overshoot-stick with the
+ *    stick's duration in its range), when a residual's enclosure misses
+ *    zero (the natural one or the mean-value form F(c) + J(X)(X - c)), or
+ *    that of the stick's rotation condition |u| = |w|, or of R less its
+ *    dependence on s through a and b, or (slip-stick) of the closure with s
+ *    eliminated, C . (a x b); or when the Krawczyk image K(X) = c - Y F(c)
+ *    + (I - Y J(X))(X - c), Y = mid(J)^-1, misses X;
  *  - proved to hold exactly one root when K(X) lies inside X's interior;
- *  - otherwise cut to X n K(X) and halved across its widest side, down to a
- *    width where it is left undecided (a double root, a root on the box's
- *    face, or a budget too small).
- * Near t1 = 0 (and t2 = 0 for the overshoot) every residual vanishes with
- * the determinant: the box starts at a positive lower bound there.
+ *  - otherwise cut to X n K(X) and halved across its widest side (the
+ *    states' sides weigh less: they follow from the durations); a small
+ *    box is first tried in a box around Newton's point that holds it (a
+ *    root near a face), and below a width it is left undecided (a double
+ *    root, or a continuum: at t1 = t2 = 0 every start closes).
  */
 #include <float.h>
 #include <math.h>
@@ -491,69 +502,61 @@ static iv iv_div(iv a, iv b) {
   return iv_mul(a, r);
 }
 
-/* Narrow s = (X[nt], X[nt + 1]) to the solutions of the linear conditions
- * on it over the durations of X (m of them: a, and b for the overshoot):
- * interval Gauss-Seidel, preconditioned by the inverse of the midpoint
- * matrix when there are two.  0 when no s of X solves them. */
+/* One Gauss-Seidel step: the row a0 s[v] + a1 s[1 - v] in r narrows s[v].
+ * 0 when s[v] is left empty. */
+static int narrow(iv r, iv a0, iv a1, iv *s, int v) {
+  if (iv_has_zero(a0))
+    return 1;
+  iv x = iv_div(iv_sub(r, iv_mul(a1, s[1 - v])), a0);
+  if (isnan(x.lo) || isnan(x.hi))
+    return 1;
+  double lo = fmax(s[v].lo, x.lo), hi = fmin(s[v].hi, x.hi);
+  if (lo > hi)
+    return 0;
+  s[v] = (iv){lo, hi};
+  return 1;
+}
+
+/* Narrow s = (X[nt], X[nt + 1]) to the solutions of the two linear
+ * conditions on it (a, b) over the durations of X: interval Gauss-Seidel,
+ * preconditioned by the inverse of the midpoint matrix.  0 when no s of X
+ * solves them. */
 static int contract_s(const problem *P, const ends *e, iv *s) {
-  int m = 2;
   iv A[2][2], r[2];
   const ad *w[2] = {e->a, e->b};
-  for (int i = 0; i < m; i++) {
+  for (int i = 0; i < 2; i++) {
     A[i][0] = w[i][0].v;
     A[i][1] = w[i][1].v;
     r[i] = (iv){-w[i][2].v.hi, -w[i][2].v.lo};
   }
-  {
-    double M[4] = {iv_mid(A[0][0]), iv_mid(A[0][1]), iv_mid(A[1][0]),
-                   iv_mid(A[1][1])},
-           Y[4];
-    if (invert(2, M, Y)) {
-      iv PA[2][2], q[2];
-      for (int i = 0; i < 2; i++) {
-        iv y0 = iv_exact(Y[2 * i]), y1 = iv_exact(Y[2 * i + 1]);
-        q[i] = iv_add(iv_mul(y0, r[0]), iv_mul(y1, r[1]));
-        for (int j = 0; j < 2; j++)
-          PA[i][j] = iv_add(iv_mul(y0, A[0][j]), iv_mul(y1, A[1][j]));
-      }
-      memcpy(A, PA, sizeof A);
-      memcpy(r, q, sizeof r);
+  double M[4] = {iv_mid(A[0][0]), iv_mid(A[0][1]), iv_mid(A[1][0]),
+                 iv_mid(A[1][1])},
+         Y[4];
+  if (invert(2, M, Y)) {
+    iv PA[2][2], q[2];
+    for (int i = 0; i < 2; i++) {
+      iv y0 = iv_exact(Y[2 * i]), y1 = iv_exact(Y[2 * i + 1]);
+      q[i] = iv_add(iv_mul(y0, r[0]), iv_mul(y1, r[1]));
+      for (int j = 0; j < 2; j++)
+        PA[i][j] = iv_add(iv_mul(y0, A[0][j]), iv_mul(y1, A[1][j]));
     }
+    memcpy(A, PA, sizeof A);
+    memcpy(r, q, sizeof r);
   }
-  for (int sweep = 0; sweep < 2; sweep++)
-    for (int i = 0; i < m; i++)
-      for (int v = 0; v < 2; v++) {
-        /* row i solved for s[v] */
-        if (iv_has_zero(A[i][v]))
-          continue;
-        iv num = iv_sub(r[i], iv_mul(A[i][1 - v], s[1 - v]));
-        iv x = iv_div(num, A[i][v]);
-        if (isnan(x.lo) || isnan(x.hi))
-          continue;
-        double lo = fmax(s[v].lo, x.lo), hi = fmin(s[v].hi, x.hi);
-        if (lo > hi)
-          return 0;
-        s[v] = (iv){lo, hi};
-      }
   /* slip-overshoot-stick: the stick's duration in its range, V t3 = c .
    * (s, 1), bounds s along the direction the two conditions leave loose
    * (where they are nearly parallel s is large, and so is t3) */
-  if (P->n == 3) {
-    iv rt = iv_sub(iv_mul(P->V, (iv){P->tau_lo, P->tau_hi}), e->c[2].v);
-    for (int sweep = 0; sweep < 2; sweep++)
-      for (int v = 0; v < 2; v++) {
-        if (iv_has_zero(e->c[v].v))
-          continue;
-        iv num = iv_sub(rt, iv_mul(e->c[1 - v].v, s[1 - v]));
-        iv x = iv_div(num, e->c[v].v);
-        if (isnan(x.lo) || isnan(x.hi))
-          continue;
-        double lo = fmax(s[v].lo, x.lo), hi = fmin(s[v].hi, x.hi);
-        if (lo > hi)
+  iv rt = {0, 0};
+  if (P->n == 3)
+    rt = iv_sub(iv_mul(P->V, (iv){P->tau_lo, P->tau_hi}), e->c[2].v);
+  for (int sweep = 0; sweep < 2; sweep++)
+    for (int v = 0; v < 2; v++) {
+      for (int i = 0; i < 2; i++)
+        if (!narrow(r[i], A[i][v], A[i][1 - v], s, v))
           return 0;
-        s[v] = (iv){lo, hi};
-      }
-  }
+      if (P->n == 3 && !narrow(rt, e->c[v].v, e->c[1 - v].v, s, v))
+        return 0;
+    }
   return 1;
 }
 
