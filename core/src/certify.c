@@ -32,8 +32,8 @@
  *    stick's duration in its range), when a residual's enclosure misses
  *    zero (the natural one or the mean-value form F(c) + J(X)(X - c)), or
  *    that of the stick's rotation condition |u| = |w|, or of R less its
- *    dependence on s through a and b, or (slip-stick) of the closure with s
- *    eliminated, C . (a x b); or when the Krawczyk image K(X) = c - Y F(c)
+ *    dependence on s through a and b, or of the closures with s eliminated,
+ *    C . (a x b); or when the Krawczyk image K(X) = c - Y F(c)
  *    + (I - Y J(X))(X - c), Y = mid(J)^-1, misses X;
  *  - proved to hold exactly one root when K(X) lies inside X's interior;
  *  - otherwise cut to X n K(X) and halved across its widest side (the
@@ -560,20 +560,24 @@ static int contract_s(const problem *P, const ends *e, iv *s) {
   return 1;
 }
 
-/* Slip-stick only: the closure residuals with s eliminated, det [a; b; C]
- * = C . (a x b), functions of the durations alone (the stick's duration is
- * t2).  Where such a one keeps a sign over the box no root lies there, of
- * any s: at a root with det != 0 it is det R = 0, and where a and b are
- * parallel and have a common solution a x b = 0.  1 when excluded. */
-static void reduced_at(const problem *P, const ends *e, const iv *X, ad *R) {
+/* The closure residuals with s eliminated, det [a; b; C] = C . (a x b),
+ * functions of the durations alone: for slip-stick the stick's duration is
+ * t2; for slip-overshoot-stick it is any value of T (the range the box
+ * allows it), and the closure of x2 is a third, c . (a x b) = V t3 det.
+ * Where one keeps a sign over the box no root lies there, of any s: at a
+ * root with det != 0 it is det times the residual, and where a and b are
+ * parallel and have a common solution a x b = 0.  Into R; their number. */
+static int reduced_at(const problem *P, const ends *e, const iv *X, iv T,
+                      ad *R) {
   ad sg[3];
   for (int i = 0; i < 3; i++) {
     int j = (i + 1) % 3, k = (i + 2) % 3;
     ad p = ad_mul(&e->a[j], &e->b[k]), q = ad_mul(&e->a[k], &e->b[j]);
     sg[i] = ad_sub(&p, &q);
   }
-  ad t2 = ad_var(X[1], 1), co, si;
-  ad_cos_sin(1.0, &t2, &co, &si);
+  /* the stick's duration: t2, or (slip-overshoot-stick) any value of T */
+  ad st = P->n == 2 ? ad_var(X[1], 1) : ad_const(T), co, si;
+  ad_cos_sin(1.0, &st, &co, &si);
   R[0] = R[1] = ad_const(iv_exact(0));
   for (int c = 0; c < 3; c++) {
     ad Ac = ad_scale(P->chi, &e->x[1][c]);
@@ -600,12 +604,27 @@ static void reduced_at(const problem *P, const ends *e, const iv *X, ad *R) {
     R[0] = ad_add(&R[0], &p);
     R[1] = ad_add(&R[1], &q);
   }
+  if (P->n == 2)
+    return 2;
+  /* the closure of x2: c . sigma = V t3 det */
+  ad vt = ad_const(iv_mul(P->V, T));
+  R[2] = ad_mul(&e->c[0], &sg[0]);
+  for (int c = 1; c < 3; c++) {
+    ad p = ad_mul(&e->c[c], &sg[c]);
+    R[2] = ad_add(&R[2], &p);
+  }
+  ad q = ad_mul(&vt, &sg[2]);
+  R[2] = ad_sub(&R[2], &q);
+  return 3;
 }
 
-static int reduced_excludes(const problem *P, const ends *e, const iv *X) {
-  ad R[2], Rc[2];
-  reduced_at(P, e, X, R);
-  for (int r = 0; r < 2; r++)
+/* 1 when one of them keeps a sign (natural enclosure, or the mean-value
+ * form about the middle of the durations). */
+static int reduced_excludes(const problem *P, const ends *e, const iv *X,
+                            iv T) {
+  ad R[3], Rc[3];
+  int nr = reduced_at(P, e, X, T, R);
+  for (int r = 0; r < nr; r++)
     if (!iv_has_zero(R[r].v))
       return 1;
   /* the mean-value form about the middle */
@@ -614,8 +633,8 @@ static int reduced_excludes(const problem *P, const ends *e, const iv *X) {
     Xc[i] = iv_exact(iv_mid(X[i]));
   ends ec;
   free_ends(P, Xc, &ec);
-  reduced_at(P, &ec, Xc, Rc);
-  for (int r = 0; r < 2; r++) {
+  reduced_at(P, &ec, Xc, T, Rc);
+  for (int r = 0; r < nr; r++) {
     iv v = Rc[r].v;
     for (int j = 0; j < 2 && j < R[r].n; j++)
       v = iv_add(v, iv_mul(R[r].d[j], iv_sub(X[j], Xc[j])));
@@ -631,7 +650,8 @@ static int box_test(const problem *P, iv *X, iv *E) {
   int nv = P->nv, nt = nv - 2;
   ends e;
   free_ends(P, X, &e);
-  if (!contract_s(P, &e, &X[nt]) || (P->n == 2 && reduced_excludes(P, &e, X)))
+  if (!contract_s(P, &e, &X[nt]) ||
+      (P->n == 2 && reduced_excludes(P, &e, X, iv_exact(0))))
     return 0;
   iv Xc[NV] = {{0, 0}}, tau, tauc;
   for (int i = 0; i < nv; i++)
@@ -640,6 +660,12 @@ static int box_test(const problem *P, iv *X, iv *E) {
   residuals_at(P, &e, X, FX, &tau, &FX[nv]);
   /* the stick's duration in its range */
   if (P->n == 3 && (tau.lo > P->tau_hi || tau.hi < P->tau_lo))
+    return 0;
+  /* slip-overshoot-stick: the closures with s eliminated, for any stick's
+   * duration the box allows */
+  if (P->n == 3 &&
+      reduced_excludes(P, &e, X,
+                       (iv){fmax(tau.lo, P->tau_lo), fmin(tau.hi, P->tau_hi)}))
     return 0;
   ends ec;
   free_ends(P, Xc, &ec);
