@@ -618,29 +618,28 @@ static int reduced_at(const problem *P, const ends *e, const iv *X, iv T,
   return 3;
 }
 
+/* The mean-value form of f over X about its middle Xc: f(Xc) + f'(X) (X -
+ * Xc), the gradient's first n entries (the rest are zero). */
+static iv centred(iv f_mid, const ad *f, int n, const iv *X, const iv *Xc) {
+  for (int j = 0; j < n && j < f->n; j++)
+    f_mid = iv_add(f_mid, iv_mul(f->d[j], iv_sub(X[j], Xc[j])));
+  return f_mid;
+}
+
 /* 1 when one of them keeps a sign (natural enclosure, or the mean-value
- * form about the middle of the durations). */
-static int reduced_excludes(const problem *P, const ends *e, const iv *X,
-                            iv T) {
+ * form about the middle of the durations, where the free phases end as ec
+ * says). */
+static int reduced_excludes(const problem *P, const ends *e, const ends *ec,
+                            const iv *X, const iv *Xc, iv T) {
   ad R[3], Rc[3];
   int nr = reduced_at(P, e, X, T, R);
   for (int r = 0; r < nr; r++)
     if (!iv_has_zero(R[r].v))
       return 1;
-  /* the mean-value form about the middle */
-  iv Xc[NV] = {{0, 0}};
-  for (int i = 0; i < 2; i++)
-    Xc[i] = iv_exact(iv_mid(X[i]));
-  ends ec;
-  free_ends(P, Xc, &ec);
-  reduced_at(P, &ec, Xc, T, Rc);
-  for (int r = 0; r < nr; r++) {
-    iv v = Rc[r].v;
-    for (int j = 0; j < 2 && j < R[r].n; j++)
-      v = iv_add(v, iv_mul(R[r].d[j], iv_sub(X[j], Xc[j])));
-    if (!iv_has_zero(v))
+  reduced_at(P, ec, Xc, T, Rc);
+  for (int r = 0; r < nr; r++)
+    if (!iv_has_zero(centred(Rc[r].v, &R[r], 2, X, Xc)))
       return 1;
-  }
   return 0;
 }
 
@@ -648,14 +647,18 @@ static int reduced_excludes(const problem *P, const ends *e, const iv *X,
  * 2 not decided (X then cut to what may hold roots, K n X). */
 static int box_test(const problem *P, iv *X, iv *E) {
   int nv = P->nv, nt = nv - 2;
-  ends e;
+  ends e, ec;
   free_ends(P, X, &e);
-  if (!contract_s(P, &e, &X[nt]) ||
-      (P->n == 2 && reduced_excludes(P, &e, X, iv_exact(0))))
+  if (!contract_s(P, &e, &X[nt]))
     return 0;
+  /* the middle, where the mean-value forms are centred (the free phases'
+   * ends depend on the durations alone) */
   iv Xc[NV] = {{0, 0}}, tau, tauc;
   for (int i = 0; i < nv; i++)
     Xc[i] = iv_exact(iv_mid(X[i]));
+  free_ends(P, Xc, &ec);
+  if (P->n == 2 && reduced_excludes(P, &e, &ec, X, Xc, iv_exact(0)))
+    return 0;
   ad FX[NV + 1], Fc[NV + 1];
   residuals_at(P, &e, X, FX, &tau, &FX[nv]);
   /* the stick's duration in its range */
@@ -664,22 +667,16 @@ static int box_test(const problem *P, iv *X, iv *E) {
   /* slip-overshoot-stick: the closures with s eliminated, for any stick's
    * duration the box allows */
   if (P->n == 3 &&
-      reduced_excludes(P, &e, X,
+      reduced_excludes(P, &e, &ec, X, Xc,
                        (iv){fmax(tau.lo, P->tau_lo), fmin(tau.hi, P->tau_hi)}))
     return 0;
-  ends ec;
-  free_ends(P, Xc, &ec);
   residuals_at(P, &ec, Xc, Fc, &tauc, &Fc[nv]);
   /* exclusion by an enclosure of a residual or of the rotation condition:
    * the natural one, or the mean-value form */
-  for (int r = 0; r <= nv; r++) {
-    const ad *fx = &FX[r];
-    iv v = Fc[r].v;
-    for (int j = 0; j < fx->n; j++)
-      v = iv_add(v, iv_mul(fx->d[j], iv_sub(X[j], Xc[j])));
-    if (!iv_has_zero(fx->v) || !iv_has_zero(v))
+  for (int r = 0; r <= nv; r++)
+    if (!iv_has_zero(FX[r].v) ||
+        !iv_has_zero(centred(Fc[r].v, &FX[r], nv, X, Xc)))
       return 0;
-  }
   /* the closure residuals (and the rotation condition) less their
    * dependence on s through the two linear conditions: G = R - la a - lb b,
    * (la, lb) cancelling dG/ds at the middle.  s follows from the durations,

@@ -154,6 +154,34 @@ static void keep_rejected(ss_orbit_report *rep, const ss_orbit *o,
            ss_orbit_kind_name(o->kind), d->text);
 }
 
+/* The two period-1 families the scan and the proof cover: slip-stick
+ * (f = 0) and slip-overshoot-stick (f = 1), 2 + f phases. */
+static const ss_mode FAMILY_SEQ[2][3] = {
+    {SS_MODE_SLIP, SS_MODE_STICK, SS_MODE_STICK},
+    {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK}};
+static const unsigned FAMILY_KIND[2] = {SS_ORBIT_STICKSLIP, SS_ORBIT_OVERSHOOT};
+
+/* Their box: each duration up to 1.5 slow modal periods. */
+static double family_box(const ss_model *m) {
+  return SS_SCAN_PERIODS * SS_TWO_PI / m->w[0];
+}
+
+/* Whether family f's period-1 orbit of durations tau is among those found
+ * (durations within 1e-7 of the period). */
+static int known_period1(const collect *c, int f, const double *tau) {
+  int n = 2 + f;
+  for (int i = 0; i < c->n; i++) {
+    const ss_orbit *q = &c->out[i];
+    int same = q->n_phases == n && q->n_turns == 1;
+    for (int k = 0; k < n && same; k++)
+      same = q->modes[k] == FAMILY_SEQ[f][k] &&
+             fabs(q->durations[k] - tau[k]) < 1e-7 * (1 + q->period);
+    if (same)
+      return 1;
+  }
+  return 0;
+}
+
 /* Refine a candidate sequence and durations; keep it if feasible. */
 static void try_solve(collect *c, int n, const ss_mode *modes,
                       const double *tau, ss_orbit_source source) {
@@ -205,9 +233,7 @@ static void certify_family(collect *c, int f, double dmax, double seconds,
                            ss_family_cert *fc) {
   const ss_model *m = c->m;
   const ss_params *p = &m->p;
-  static const ss_mode seq[2][3] = {
-      {SS_MODE_SLIP, SS_MODE_STICK, SS_MODE_STICK},
-      {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK}};
+  const ss_mode *seq = FAMILY_SEQ[f];
   int n = 2 + f;
   double L = CERT_STATE_BOX * fmax(p->V, p->ur / p->chi);
   double tlo = CERT_SLIP_MIN * SS_TWO_PI / m->w[1];
@@ -272,7 +298,7 @@ static void certify_family(collect *c, int f, double dmax, double seconds,
     memset(&o, 0, sizeof o);
     o.kind = f ? SS_ORBIT_OVERSHOOT : SS_ORBIT_STICKSLIP;
     o.n_phases = n;
-    memcpy(o.modes, seq[f], sizeof o.modes[0] * (size_t)n);
+    memcpy(o.modes, seq, sizeof o.modes[0] * (size_t)n);
     memcpy(o.durations, tau, sizeof tau[0] * (size_t)n);
     double x0[4] = {u[2], u[2] + p->ur / p->chi, u[3], p->V};
     ss_x_to_z(m, x0, o.z0);
@@ -291,18 +317,10 @@ static void certify_family(collect *c, int f, double dmax, double seconds,
       continue;
     }
     fc->orbits++;
-    int known = 0;
-    for (int i = 0; i < c->n && !known; i++) {
-      const ss_orbit *b = &c->out[i];
-      known = b->n_phases == n && b->n_turns == 1;
-      for (int k = 0; k < n && known; k++)
-        known = b->modes[k] == seq[f][k] &&
-                fabs(b->durations[k] - tau[k]) < 1e-7 * (1 + b->period);
-    }
-    if (known)
+    if (known_period1(c, f, tau))
       continue;
     int before = c->n, trunc = c->rep->truncated;
-    try_solve(c, n, seq[f], tau, SS_SOURCE_CERTIFICATE);
+    try_solve(c, n, seq, tau, SS_SOURCE_CERTIFICATE);
     if (c->n > before) {
       fc->added++;
     } else if (c->rep->truncated > trunc) {
@@ -319,7 +337,7 @@ static void certify_family(collect *c, int f, double dmax, double seconds,
   /* every orbit of the family returned, inside the box, is a root */
   for (int i = 0; i < c->n && ce.complete; i++) {
     const ss_orbit *b = &c->out[i];
-    if (b->n_phases != n || b->n_turns != 1 || b->modes[1] != seq[f][1])
+    if (b->n_phases != n || b->n_turns != 1 || b->modes[1] != seq[1])
       continue;
     double u[4] = {b->durations[0], b->durations[1], b->x0[0], b->x0[2]};
     int inside = u[0] >= tlo && u[0] <= dmax && u[1] <= dmax &&
@@ -595,17 +613,13 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
    * equations reduced to two durations (scan.c) at a step of 0.3 rad of the
    * fastest motion (the fast mode, or x1 under stick) */
   {
-    double dmax = SS_SCAN_PERIODS * SS_TWO_PI / m->w[0];
+    double dmax = family_box(m);
     double h = (effort == 1   ? 0.5
                 : effort == 2 ? 0.3
                               : 0.15) /
                fmax(m->w[1], 1.0);
-    static const ss_mode seq[2][3] = {
-        {SS_MODE_SLIP, SS_MODE_STICK, SS_MODE_STICK},
-        {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK}};
-    const unsigned kind[2] = {SS_ORBIT_STICKSLIP, SS_ORBIT_OVERSHOOT};
     for (int f = 0; f < 2; f++) {
-      if (!(kinds & kind[f]) || over_budget(&c))
+      if (!(kinds & FAMILY_KIND[f]) || over_budget(&c))
         continue;
       double roots[SCAN_MAX_ROOTS][3], rejected[2][3];
       int nr = 0, n_rejected = 0, before = c.n;
@@ -617,24 +631,17 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
         return ss__fail(d, rc, "", 0, "out of memory in the orbit search");
       for (int r = 0; r < nr && !over_budget(&c); r++) {
         /* one the simulations found already needs no solve */
-        int known = 0;
-        for (int i = 0; i < c.n && !known; i++) {
-          const ss_orbit *q = &c.out[i];
-          known = q->n_phases == 2 + f && q->n_turns == 1;
-          for (int k = 0; k < 2 + f && known; k++)
-            known =
-                q->modes[k] == seq[f][k] &&
-                fabs(q->durations[k] - roots[r][k]) < 1e-7 * (1 + q->period);
-        }
-        if (known)
+        if (known_period1(&c, f, roots[r]))
           rep->duplicates++;
         else
-          try_solve(&c, 2 + f, seq[f], roots[r], SS_SOURCE_DURATION_GRID);
+          try_solve(&c, 2 + f, FAMILY_SEQ[f], roots[r],
+                    SS_SOURCE_DURATION_GRID);
       }
       /* none of the family: its closest rejected roots say why, in
        * numbers (the report keeps the closest to feasible) */
       for (int r = 0; r < n_rejected && c.n == before && !over_budget(&c); r++)
-        try_solve(&c, 2 + f, seq[f], rejected[r], SS_SOURCE_DURATION_GRID);
+        try_solve(&c, 2 + f, FAMILY_SEQ[f], rejected[r],
+                  SS_SOURCE_DURATION_GRID);
     }
   }
   /* 3. Newton on P^k from the seeds */
@@ -663,12 +670,11 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
   }
   /* 4. the proof that nothing of the two period-1 families is missing */
   if (opts->certify) {
-    double dmax = SS_SCAN_PERIODS * SS_TWO_PI / m->w[0];
+    double dmax = family_box(m);
     double secs = opts->certify_seconds > 0 ? opts->certify_seconds : 10;
-    const unsigned kind[2] = {SS_ORBIT_STICKSLIP, SS_ORBIT_OVERSHOOT};
-    int left = !!(kinds & kind[0]) + !!(kinds & kind[1]);
+    int left = !!(kinds & FAMILY_KIND[0]) + !!(kinds & FAMILY_KIND[1]);
     for (int f = 0; f < 2; f++) {
-      if (!(kinds & kind[f]) || over_budget(&c))
+      if (!(kinds & FAMILY_KIND[f]) || over_budget(&c))
         continue;
       /* within the search's own budget: a share of what is left of it, a
        * tenth kept for the rest */
