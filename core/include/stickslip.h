@@ -62,7 +62,7 @@ extern "C" {
 /* The version: the one place it is written.  The build (CMakeLists.txt),
  * the daemon and its OpenAPI document read it from here. */
 #define SS_VERSION_MAJOR 0
-#define SS_VERSION_MINOR 3
+#define SS_VERSION_MINOR 4
 #define SS_VERSION_PATCH 0
 #define SS_VERSION_HEX                                                         \
   ((SS_VERSION_MAJOR << 16) | (SS_VERSION_MINOR << 8) | SS_VERSION_PATCH)
@@ -709,7 +709,10 @@ typedef struct ss_family_cert {
 
 /** What the search did. */
 typedef struct ss_orbit_report {
-  int simulations;   /**< simulations to an attractor */
+  int simulations; /**< simulations to an attractor */
+  /** of them, stopped on reaching a stable orbit already found (within
+   *  1e-7 of the scale of one of its returns) */
+  int simulations_known;
   int newton_starts; /**< Newton solves started (durations and map) */
   int roots;         /**< converged roots */
   int infeasible;    /**< roots rejected as physically inadmissible */
@@ -721,6 +724,8 @@ typedef struct ss_orbit_report {
    *  family asked for).  Orbits of those families outside the box, and of
    *  other sequences, come only from simulation and Newton starts. */
   double scan_box, scan_step;
+  /** The scan's work: cells examined, at every refinement of the grid. */
+  long scan_cells;
   char reason[256]; /**< why nothing was found, or the closest rejection */
   /** The rejected root closest to feasible (largest violation.value), with
    *  its margins, when a root was rejected. */

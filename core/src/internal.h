@@ -58,7 +58,8 @@ double ss__now(void); /* monotonic seconds */
  * the others, the one closest to the rules of its phases among those that
  * fail at a phase's end, and among those that fail inside a phase, into
  * rejected (*n_rejected of them, 0 to 2).  The Newton starts are added to
- * *newton_starts.  The step is widened to keep at most 1000 cells a side;
+ * *newton_starts, the cells examined (at every refinement) to *cells.  The
+ * step is widened to keep at most 1000 cells a side;
  * the step used into *step.
  * stop (if not NULL) is polled once per row of the grid: a non-zero answer
  * ends the scan with SS_ECANCELED and what it found so far.
@@ -66,7 +67,8 @@ double ss__now(void); /* monotonic seconds */
 int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
                      double (*roots)[3], int max_roots, int *n_roots,
                      double (*rejected)[3], int *n_rejected, int *newton_starts,
-                     double *step, int (*stop)(void *), void *stop_cls);
+                     long *cells, double *step, int (*stop)(void *),
+                     void *stop_cls);
 
 /* A box of the certificate's unknowns (t1, t2, s1, s2): the slip's
  * duration, the stick's (slip-stick) or the overshoot's
@@ -217,5 +219,24 @@ int ss__sim_init(ss_sim *s, const ss_model *m, double t0, const double x0[4],
                  ss_diag *d);
 int ss__sim_init_mode(ss_sim *s, const ss_model *m, double t0,
                       const double x0[4], ss_mode mode, ss_diag *d);
+
+/* The returns to Sigma0 of one motion, one at a time, by one simulation (its
+ * event certificates carried from return to return): ss_poincare() for one
+ * turn after another without restarting. */
+typedef struct ss__returns {
+  ss_sim sim;
+  double t_last; /* the last phase's end */
+  int np;        /* phases so far */
+} ss__returns;
+
+/* Start at s = (z1, z1') on Sigma0; SS_OK or SS_EINVAL. */
+int ss__returns_start(ss__returns *r, const ss_model *m, const double s[2]);
+
+/* On to the next return, into out = (z1, z1'), spending at most
+ * *events_left events (decremented); the phases travelled are appended to
+ * modes and durations (room for SS_MAX_PHASES in all) when both are given.
+ * SS_OK, SS_ELIMIT_EVENTS, SS_HORIZON, or the simulation's failure. */
+int ss__returns_next(ss__returns *r, size_t *events_left, double out[2],
+                     ss_mode *modes, double *durations);
 
 #endif

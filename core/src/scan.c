@@ -27,8 +27,11 @@
  * sign or t3 turns by more than 1 rad is split, up to 8 times finer (and
  * then tried as it is, unless a pole crosses it); a
  * cell whose corners do not all give t3 in (-0.5, dmax + 0.5) cannot hold a
- * root with t3 in the box, and away from a pole neither can one where the
- * rotation condition E (below) stays away from zero.  Newton on the reduced
+ * root with t3 in the box (nor can one a pole crosses where t3's numerator
+ * keeps its sign), and away from a pole neither can one where the
+ * rotation condition E (below) stays away from zero, nor one whose every
+ * start has the slip reach x2' = V before the cell's slip duration (most
+ * roots of the reduced equations are of that kind).  Newton on the reduced
  * equations times det (forward differences) starts at the centre of each
  * candidate cell; where Newton's first step leaves the cell's reach, the
  * cell is split and each quarter tried again, down to 1/8.  A root is kept if
@@ -88,51 +91,89 @@ static void over_at(const ss_model *m, double t, over_map *O) {
 
 /* One point of the scan: the determinant, det * R, and (overshoot) t3. */
 typedef struct point {
-  double det, Rn[2], t3;
+  double det, t3;
+  double n3;    /* V det t3, smooth where t3 has a pole (overshoot) */
+  double sn[2]; /* det * s: the start */
+  /* a slip from the start keeps x2' <= V at the grid times j h, j = 1 ..
+   * clear, and breaks it first at j = first_bad (-1: not found yet); made
+   * as far as slip_breaks() needs */
+  long clear, first_bad;
+  /* det (c, c') at the stick's start, c = x1 - chi x2 */
+  double Ac, Bc;
   /* det^2 (|u|^2 - |w|^2): the stick turns w = (Ac, Bc) into u = (s1 -
    * chi (s1 + k), s2 - chi V), a rotation, so a root needs E = 0; E does not
    * depend on the stick's duration */
   double E;
+  /* det * R, made by residual() when a cell needs it (a sincos of t3: most
+   * points are only ever judged by det, t3, E and the start); NAN where t3
+   * is not in (-0.5, tmax + 0.5) */
+  double Rn[2], tmax;
+  int rn_made;
 } point;
 
-/* The stick's closure residual times det, from the stick's start state
- * times det (xd) and det * s (sn), for a stick of duration t (co = cos t,
- * si = sin t). */
-static void closure(const ss_model *m, const double xd[3], const double sn[2],
-                    double det, double co, double si, point *q) {
-  double chi = m->p.chi, V = m->p.V, k = m->p.ur / chi;
-  double Ac = xd[0] - chi * xd[1], Bc = xd[2] - chi * V * det;
-  double u0 = sn[0] - chi * (sn[0] + k * det), u1 = sn[1] - chi * V * det;
-  q->E = u0 * u0 + u1 * u1 - Ac * Ac - Bc * Bc;
-  q->Rn[0] = chi * (sn[0] + k * det) + Ac * co + Bc * si - sn[0];
-  q->Rn[1] = chi * V * det - Ac * si + Bc * co - sn[1];
+/* The stick's start times det, from its start state times det (xd), and
+ * E. */
+static void stick_start(const ss_model *m, const double xd[3], point *q) {
+  double chi = m->p.chi, V = m->p.V, k = m->p.ur / chi, det = q->det;
+  q->Ac = xd[0] - chi * xd[1];
+  q->Bc = xd[2] - chi * V * det;
+  double u0 = q->sn[0] - chi * (q->sn[0] + k * det);
+  double u1 = q->sn[1] - chi * V * det;
+  q->E = u0 * u0 + u1 * u1 - q->Ac * q->Ac - q->Bc * q->Bc;
 }
 
-/* Slip-stick at (t1 of S, t2), c2 = cos t2, s2 = sin t2; s = sn / det
- * into sn. */
+/* The stick's closure residual times det for a stick of duration t (co =
+ * cos t, si = sin t). */
+static void closure(const ss_model *m, double co, double si, point *q) {
+  double chi = m->p.chi, V = m->p.V, k = m->p.ur / chi, det = q->det;
+  const double *sn = q->sn;
+  q->Rn[0] = chi * (sn[0] + k * det) + q->Ac * co + q->Bc * si - sn[0];
+  q->Rn[1] = chi * V * det - q->Ac * si + q->Bc * co - sn[1];
+  q->rn_made = 1;
+}
+
+/* det * R at q, made on first use. */
+static const double *residual(const ss_model *m, point *q) {
+  if (!q->rn_made) {
+    if (q->t3 > -0.5 && q->t3 < q->tmax + 0.5) {
+      double co, si;
+      ss__sincos(q->t3, &si, &co);
+      closure(m, co, si, q);
+    } else {
+      q->Rn[0] = q->Rn[1] = NAN;
+      q->rn_made = 1;
+    }
+  }
+  return q->Rn;
+}
+
+/* Slip-stick at (t1 of S, t2), c2 = cos t2, s2 = sin t2. */
 static void eval_ss(const ss_model *m, const slip_map *S, double t2, double c2,
-                    double s2, point *q, double sn[2]) {
+                    double s2, point *q) {
   double V = m->p.V, k = m->p.ur / m->p.chi;
   /* x2' = V at the end of the slip; x2 + V t2 = s1 + k at the end of the
    * stick */
   double a0 = S->Y[3][0], a1 = S->Y[3][1], ra = V - S->y[3];
   double b0 = S->Y[1][0] - 1, b1 = S->Y[1][1], rb = k - S->y[1] - V * t2;
-  double det = a0 * b1 - a1 * b0;
+  double det = a0 * b1 - a1 * b0, *sn = q->sn;
+  q->clear = 0;
+  q->first_bad = -1;
   sn[0] = ra * b1 - a1 * rb;
   sn[1] = a0 * rb - b0 * ra;
   double xd[3];
   for (int i = 0; i < 3; i++)
     xd[i] = S->Y[i][0] * sn[0] + S->Y[i][1] * sn[1] + S->y[i] * det;
   q->det = det;
-  q->t3 = 0;
-  closure(m, xd, sn, det, c2, s2, q);
+  q->t3 = q->n3 = 0;
+  stick_start(m, xd, q);
+  closure(m, c2, s2, q);
 }
 
-/* Slip-overshoot-stick at (t1 of S, t2 of O); s = sn / det into sn.  The
- * residual only where t3 is in (-0.5, tmax + 0.5) (else NAN: such a point
- * is never a corner of a candidate cell). */
+/* Slip-overshoot-stick at (t1 of S, t2 of O); the residual (residual())
+ * only where t3 is in (-0.5, tmax + 0.5), else NAN: such a point is never
+ * a corner of a candidate cell. */
 static void eval_sos(const ss_model *m, const slip_map *S, const over_map *O,
-                     double tmax, point *q, double sn[2]) {
+                     double tmax, point *q) {
   double V = m->p.V, k = m->p.ur / m->p.chi;
   /* the overshoot's end is G (Y s + y) + g; its x2' (row 3 of G) is the
    * second condition on s, so only that row is needed before s */
@@ -143,7 +184,9 @@ static void eval_sos(const ss_model *m, const slip_map *S, const over_map *O,
     rb -= O->G[3][l] * S->y[l];
   }
   double a0 = S->Y[3][0], a1 = S->Y[3][1], ra = V - S->y[3];
-  double det = a0 * b1 - a1 * b0;
+  double det = a0 * b1 - a1 * b0, *sn = q->sn;
+  q->clear = 0;
+  q->first_bad = -1;
   sn[0] = ra * b1 - a1 * rb;
   sn[1] = a0 * rb - b0 * ra;
   /* then the slip's end times det, u = Y sn + y det, and the overshoot's
@@ -155,20 +198,15 @@ static void eval_sos(const ss_model *m, const slip_map *S, const over_map *O,
     xd[i] = O->G[i][0] * u[0] + O->G[i][1] * u[1] + O->G[i][2] * u[2] +
             O->G[i][3] * u[3] + O->g[i] * det;
   q->det = det;
-  q->t3 = (sn[0] + k * det - xd[1]) / (V * det);
+  q->n3 = sn[0] + k * det - xd[1];
+  q->t3 = q->n3 / (V * det);
+  q->tmax = tmax;
+  q->rn_made = 0;
   if (!isfinite(q->t3)) {
-    q->Rn[0] = q->Rn[1] = NAN;
     q->E = NAN;
     return;
   }
-  if (!(q->t3 > -0.5 && q->t3 < tmax + 0.5)) {
-    closure(m, xd, sn, det, 1, 0, q);
-    q->Rn[0] = q->Rn[1] = NAN;
-    return;
-  }
-  double co, si;
-  ss__sincos(q->t3, &si, &co);
-  closure(m, xd, sn, det, co, si, q);
+  stick_start(m, xd, q);
 }
 
 /* The last two slip and overshoot maps off the grid: Newton's differences
@@ -204,14 +242,13 @@ static const over_map *over_cached(maps *mc, double t) {
 }
 
 static void eval_at(maps *mc, int n, double t1, double t2, point *q) {
-  double sn[2];
   const slip_map *S = slip_cached(mc, t1);
   if (n == 2) {
     double co, si;
     ss__sincos(t2, &si, &co);
-    eval_ss(mc->m, S, t2, co, si, q, sn);
+    eval_ss(mc->m, S, t2, co, si, q);
   } else {
-    eval_sos(mc->m, S, over_cached(mc, t2), INFINITY, q, sn);
+    eval_sos(mc->m, S, over_cached(mc, t2), INFINITY, q);
   }
 }
 
@@ -221,8 +258,9 @@ static int reduced(maps *mc, int n, const double t[2], double Rn[2],
                    double *det, double *t3) {
   point q;
   eval_at(mc, n, t[0], t[1], &q);
-  Rn[0] = q.Rn[0];
-  Rn[1] = q.Rn[1];
+  const double *r = residual(mc->m, &q);
+  Rn[0] = r[0];
+  Rn[1] = r[1];
   *det = q.det;
   *t3 = q.t3;
   return isfinite(Rn[0]) && isfinite(Rn[1]) ? 0 : -1;
@@ -242,9 +280,13 @@ typedef struct scan {
   /* whether S[j] and O[j] are made: those of the grid's own times always,
    * the finer ones when a split needs them (few do) */
   unsigned char *made;
+  /* x2' - V at the end of a slip of duration j h from y0(s), = xv[j][0] s1 +
+   * xv[j][1] s2 + xv[j][2]: row 3 of S[j stride], side by side */
+  double (*xv)[3];
   double (*roots)[3];
   int max, count;
   int newton; /* Newton starts */
+  long cells; /* cells examined */
   /* the roots closest to passing implausible(), failing at a phase's end
    * [0] or inside a phase [1], and how far they fail (INFINITY: none) */
   double rejected[2][3], rejected_by[2];
@@ -277,21 +319,20 @@ static double implausible(const scan *sc, const double t[2], double t3,
   slip_map S;
   over_map O;
   point q;
-  double sn[2], s[2], x[4], y[4];
+  double s[2], x[4], y[4];
   slip_at(m, t[0], &S);
   if (sc->n == 2) {
     double co, si;
     ss__sincos(t[1], &si, &co);
-    eval_ss(m, &S, t[1], co, si, &q, sn);
+    eval_ss(m, &S, t[1], co, si, &q);
   } else {
     over_at(m, t[1], &O);
-    eval_sos(m, &S, &O, INFINITY, &q, sn);
+    eval_sos(m, &S, &O, INFINITY, &q);
   }
-  s[0] = sn[0] / q.det;
-  s[1] = sn[1] / q.det;
+  s[0] = q.sn[0] / q.det;
+  s[1] = q.sn[1] / q.det;
   for (long j = 1; j < sc->np && (double)j * sc->h < t[0]; j++) {
-    const slip_map *Sj = &sc->S[j * sc->stride];
-    double g = Sj->Y[3][0] * s[0] + Sj->Y[3][1] * s[1] + Sj->y[3] - V;
+    double g = sc->xv[j][0] * s[0] + sc->xv[j][1] * s[1] + sc->xv[j][2];
     if (g > tol)
       return g;
   }
@@ -412,7 +453,7 @@ static int newton(scan *sc, double t1, double t2, double h) {
  * halves the Newton starts where the stick's duration turns fast); for the
  * slip-stick cells it lost one of the search battery's orbits at effort 1,
  * so those go by the residual alone. */
-static int e_reaches_zero(const point *c[4]) {
+static int e_reaches_zero(point *const c[4]) {
   double lo = INFINITY, hi = -INFINITY;
   for (int k = 0; k < 4; k++) {
     /* as fmin and fmax, a NAN is passed over */
@@ -424,11 +465,85 @@ static int e_reaches_zero(const point *c[4]) {
            (lo > 0.5 * (hi - lo) || hi < -0.5 * (hi - lo)));
 }
 
+/* Do the corners' n3 keep one sign by more than half their spread? */
+static int keeps_sign(point *const c[4]) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (int k = 0; k < 4; k++) {
+    double v = c[k]->n3;
+    lo = v < lo ? v : lo;
+    hi = v > hi ? v : hi;
+  }
+  return isfinite(lo) && isfinite(hi) &&
+         (lo > 0.5 * (hi - lo) || hi < -0.5 * (hi - lo));
+}
+
+/* Does the slip break its rule (x2' < V) at one grid time j h before a1,
+ * the cell's least slip duration, for the start of each corner, by more
+ * than half the corners' spread?  Then no root in the cell is an orbit
+ * (implausible() rejects a root at that grid time).  In a cell the
+ * determinant keeps its sign in, the start s is smooth and x2'(j h) - V is
+ * linear in s; were it linear across the cell, its least value would be at
+ * a corner, and the margin of half the spread is for its curvature, as for
+ * E and the residual.  Most roots of the reduced equations are of this kind
+ * (from a start, x2' = V at every crossing, and t1 must be the first): at
+ * chi 0.96, ur/us 15, 4201 of the 4391 roots in the box, none an orbit,
+ * which took 128708 Newton starts to find. */
+static int slip_breaks(const scan *sc, double a1, point *const c[4]) {
+  double s[4][2];
+  int pos = 0, neg = 0;
+  for (int k = 0; k < 4; k++) {
+    pos |= c[k]->det > 0;
+    neg |= !(c[k]->det > 0);
+  }
+  if (pos && neg)
+    return 0;
+  const ss_params *p = &sc->m->p;
+  double tol = 1e-9 * (p->ur + sc->scale);
+  long last = a1 / sc->h < (double)sc->np ? (long)(a1 / sc->h) : sc->np - 1;
+  while (last >= 1 && (double)last * sc->h >= a1)
+    last--;
+  /* before the corners' latest first break, one of them keeps the rule */
+  long first = 1;
+  for (int k = 0; k < 4; k++) {
+    point *q = c[k];
+    s[k][0] = q->sn[0] / q->det;
+    s[k][1] = q->sn[1] / q->det;
+    if (q->first_bad < 0 && q->clear < last) {
+      long j = q->clear + 1;
+      double s0 = s[k][0], s1 = s[k][1];
+      while (j <= last &&
+             !(sc->xv[j][0] * s0 + sc->xv[j][1] * s1 + sc->xv[j][2] > tol))
+        j++;
+      if (j <= last)
+        q->first_bad = j;
+      q->clear = j - 1;
+    }
+    if (q->first_bad < 0 || q->first_bad > last)
+      return 0;
+    first = q->first_bad > first ? q->first_bad : first;
+  }
+  /* from the end back: the crossing before t1 is the likely one */
+  for (long j = last; j >= first; j--) {
+    const double *v = sc->xv[j];
+    double lo = INFINITY, hi = -INFINITY;
+    for (int k = 0; k < 4; k++) {
+      double g = v[0] * s[k][0] + v[1] * s[k][1] + v[2];
+      lo = g < lo ? g : lo;
+      hi = g > hi ? g : hi;
+    }
+    if (lo > tol + 0.5 * (hi - lo))
+      return 1;
+  }
+  return 0;
+}
+
 /* Does each component's corner values reach zero within half their
  * spread?  Where not both change sign, the plane through the corners must
  * also put the zero within two cells of the centre (Newton's first step,
  * nearly). */
-static int candidate(const point *c[4]) {
+static int candidate(const ss_model *m, point *const c[4]) {
+  for (int k = 0; k < 4; k++)
+    residual(m, c[k]);
   int strict = 1;
   for (int r = 0; r < 2; r++) {
     double lo = INFINITY, hi = -INFINITY;
@@ -466,8 +581,10 @@ static int candidate(const point *c[4]) {
  * too coarse a model), the same in its quarters, up to refine more
  * halvings. */
 static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
-                     const point *c[4], int refine) {
-  if ((sc->n == 3 && !e_reaches_zero(c)) || !candidate(c) ||
+                     point *const c[4], int refine) {
+  sc->cells++;
+  if ((sc->n == 3 && (!e_reaches_zero(c) || slip_breaks(sc, a1, c))) ||
+      !candidate(sc->m, c) ||
       newton(sc, 0.5 * (a1 + b1), 0.5 * (a2 + b2), b1 - a1) != -1 ||
       refine == 0)
     return;
@@ -478,7 +595,7 @@ static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
   eval_at(&sc->mc, sc->n, m1, m2, &e[2]);
   eval_at(&sc->mc, sc->n, m1, b2, &e[3]);
   eval_at(&sc->mc, sc->n, b1, m2, &e[4]);
-  const point *q[4][4] = {{c[0], &e[0], &e[1], &e[2]},
+  point *const q[4][4] = {{c[0], &e[0], &e[1], &e[2]},
                           {&e[0], c[1], &e[2], &e[3]},
                           {&e[1], &e[2], c[2], &e[4]},
                           {&e[2], &e[3], &e[4], c[3]}};
@@ -490,10 +607,10 @@ static void try_cell(scan *sc, double a1, double b1, double a2, double b2,
 
 /* A slip-overshoot-stick cell [i1, k1] x [i2, k2] in fine steps, corners
  * c: (i1, i2), (i1, k2), (k1, i2), (k1, k2). */
-static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
-                     const point *c0, const point *c1, const point *c2,
-                     const point *c3) {
-  const point *c[4] = {c0, c1, c2, c3};
+static void cell_sos(scan *sc, long i1, long k1, long i2, long k2, point *c0,
+                     point *c1, point *c2, point *c3) {
+  point *const c[4] = {c0, c1, c2, c3};
+  sc->cells++;
   double lo = INFINITY, hi = -INFINITY, dm = sc->dmax;
   int pos = 0, neg = 0, near = 0;
   for (int k = 0; k < 4; k++) {
@@ -507,11 +624,17 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
     }
   }
   int across = pos && neg;
-  /* nowhere near the box, and no pole through the cell */
-  if (!near && !across)
+  /* nowhere near the box, and no pole through the cell; or a pole through
+   * it, but t3's numerator n3 keeping its sign: then t3 runs from the
+   * corners' values out to an infinity, never into the box (for n3 and det
+   * linear in the cell, n3 / det has no extremum inside it; the margin of
+   * half the spread, as for E, is for their curvature) */
+  if (!near && (!across || keeps_sign(c)))
     return;
-  /* away from a pole, E must reach zero in the cell */
-  if (!across && !e_reaches_zero(c))
+  /* away from a pole, E must reach zero in the cell, and the slip keep its
+   * rule */
+  if (!across && (!e_reaches_zero(c) ||
+                  slip_breaks(sc, (double)i1 * sc->h / (double)sc->stride, c)))
     return;
   double hf = sc->h / (double)sc->stride;
   /* split; at the finest level a cell with no pole is tried as it is */
@@ -524,12 +647,11 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
     const slip_map *S = sc->S;
     const over_map *O = sc->O;
     point e[5]; /* (i1, m2) (m1, i2) (m1, m2) (m1, k2) (k1, m2) */
-    double sn[2];
-    eval_sos(sc->m, &S[i1], &O[m2], dm, &e[0], sn);
-    eval_sos(sc->m, &S[m1], &O[i2], dm, &e[1], sn);
-    eval_sos(sc->m, &S[m1], &O[m2], dm, &e[2], sn);
-    eval_sos(sc->m, &S[m1], &O[k2], dm, &e[3], sn);
-    eval_sos(sc->m, &S[k1], &O[m2], dm, &e[4], sn);
+    eval_sos(sc->m, &S[i1], &O[m2], dm, &e[0]);
+    eval_sos(sc->m, &S[m1], &O[i2], dm, &e[1]);
+    eval_sos(sc->m, &S[m1], &O[m2], dm, &e[2]);
+    eval_sos(sc->m, &S[m1], &O[k2], dm, &e[3]);
+    eval_sos(sc->m, &S[k1], &O[m2], dm, &e[4]);
     cell_sos(sc, i1, m1, i2, m2, c0, &e[0], &e[1], &e[2]);
     cell_sos(sc, i1, m1, m2, k2, &e[0], c1, &e[2], &e[3]);
     cell_sos(sc, m1, k1, i2, m2, &e[1], &e[2], c2, &e[4]);
@@ -545,15 +667,14 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2,
 int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
                      double (*roots)[3], int max_roots, int *n_roots,
                      double (*rejected)[3], int *n_rejected, int *newton_starts,
-                     double *step, int (*stop)(void *), void *stop_cls) {
+                     long *cells, double *step, int (*stop)(void *),
+                     void *stop_cls) {
   *n_roots = 0;
   *n_rejected = 0;
   if ((n != 2 && n != 3) || !(dmax > 0) || !(h > 0))
     return SS_EINVAL;
-  double cells = ceil(dmax / h);
-  long N = cells < 8                ? 8
-           : cells > SCAN_MAX_CELLS ? SCAN_MAX_CELLS
-                                    : (long)cells;
+  double side = ceil(dmax / h);
+  long N = side < 8 ? 8 : side > SCAN_MAX_CELLS ? SCAN_MAX_CELLS : (long)side;
   h = dmax / (double)N;
   *step = h;
   long np = N + 1, stride = n == 3 ? 1L << SCAN_MAX_DEPTH : 1;
@@ -563,12 +684,14 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
   point *row = malloc(2 * (size_t)np * sizeof *row);
   double(*cs)[2] = malloc((size_t)np * sizeof *cs);
   unsigned char *made = calloc((size_t)nf, 1);
-  if (!S || (n == 3 && !O) || !row || !cs || !made) {
+  double(*xv)[3] = malloc((size_t)np * sizeof *xv);
+  if (!S || (n == 3 && !O) || !row || !cs || !made || !xv) {
     free(S);
     free(O);
     free(row);
     free(cs);
     free(made);
+    free(xv);
     return SS_ENOMEM;
   }
   for (long j = 0; j < np; j++) {
@@ -587,11 +710,18 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
              .S = S,
              .O = O,
              .made = made,
+             .xv = xv,
              .roots = roots,
              .max = max_roots,
              .rejected_by = {INFINITY, INFINITY}};
   for (long i = 0; i < nf; i += stride)
     make_maps(&sc, i);
+  for (long j = 0; j < np; j++) {
+    const slip_map *Sj = &S[j * stride];
+    xv[j][0] = Sj->Y[3][0];
+    xv[j][1] = Sj->Y[3][1];
+    xv[j][2] = Sj->y[3] - p->V;
+  }
   /* rows t1 = i h; the first row of cells (t1 < h) is degenerate: at
    * t1 = 0 the slip's end condition holds for every s */
   int rc = SS_OK;
@@ -600,11 +730,10 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
       rc = SS_ECANCELED;
     point *cur = row + (i & 1) * np, *prv = row + ((i + 1) & 1) * np;
     for (long j = 0; j < np; j++) {
-      double sn[2];
       if (n == 2)
-        eval_ss(m, &S[i], (double)j * h, cs[j][0], cs[j][1], &cur[j], sn);
+        eval_ss(m, &S[i], (double)j * h, cs[j][0], cs[j][1], &cur[j]);
       else
-        eval_sos(m, &S[i * stride], &O[j * stride], dmax, &cur[j], sn);
+        eval_sos(m, &S[i * stride], &O[j * stride], dmax, &cur[j]);
     }
     if (i < 2)
       continue;
@@ -613,7 +742,7 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
         cell_sos(&sc, (i - 1) * stride, i * stride, j * stride,
                  (j + 1) * stride, &prv[j], &prv[j + 1], &cur[j], &cur[j + 1]);
       } else {
-        const point *c[4] = {&prv[j], &prv[j + 1], &cur[j], &cur[j + 1]};
+        point *const c[4] = {&prv[j], &prv[j + 1], &cur[j], &cur[j + 1]};
         try_cell(&sc, (double)(i - 1) * h, (double)i * h, (double)j * h,
                  (double)(j + 1) * h, c, SCAN_REFINE);
       }
@@ -624,11 +753,14 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
   free(row);
   free(cs);
   free(made);
+  free(xv);
   *n_roots = sc.count < max_roots ? sc.count : max_roots;
   for (int k = 0; k < 2; k++)
     if (isfinite(sc.rejected_by[k]))
       memcpy(rejected[(*n_rejected)++], sc.rejected[k], sizeof sc.rejected[k]);
   if (newton_starts)
     *newton_starts += sc.newton;
+  if (cells)
+    *cells += sc.cells;
   return rc;
 }

@@ -409,7 +409,8 @@ static int reached_known(collect *c, const double x[2]) {
       if (o->modes[r] == SS_MODE_SLIP &&
           (r == 0 || o->modes[r - 1] == SS_MODE_STICK) &&
           c->n_known < KNOWN_MAX) {
-        c->known[c->n_known][0] = y[0];
+        /* Sigma0's coordinates are z = x - (d0, 0) */
+        c->known[c->n_known][0] = y[0] - c->m->d0[0];
         c->known[c->n_known][1] = y[2];
         c->n_known++;
       }
@@ -434,13 +435,21 @@ static void from_simulation(collect *c, const double seed[2], int max_k) {
   pts[0][0] = seed[0];
   pts[0][1] = seed[1];
   c->rep->simulations++;
+  /* one simulation through all the returns: each event is found from the
+   * last one's certificate, none from scratch after a restart */
+  ss__returns r;
+  if (ss__returns_start(&r, c->m, seed))
+    return;
   for (int i = 0; i < SETTLE_TURNS && !k_found; i++) {
-    if (ss_poincare(c->m, pts[i], 1, MAP_EVENTS, pts[i + 1], NULL, NULL, NULL))
+    size_t events = MAP_EVENTS;
+    if (ss__returns_next(&r, &events, pts[i + 1], NULL, NULL))
       break;
     np = i + 1;
     /* within 1e-7 of a stable orbit found: it settles there, nothing new */
-    if (reached_known(c, pts[np]))
+    if (reached_known(c, pts[np])) {
+      c->rep->simulations_known++;
       return;
+    }
     if (np % SETTLE_CHECK || np < 2 * max_k + 1)
       continue;
     for (int k = 1; k <= max_k && !k_found; k++)
@@ -623,9 +632,10 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
         continue;
       double roots[SCAN_MAX_ROOTS][3], rejected[2][3];
       int nr = 0, n_rejected = 0, before = c.n;
-      int rc = ss__scan_period1(m, 2 + f, dmax, h, roots, SCAN_MAX_ROOTS, &nr,
-                                rejected, &n_rejected, &rep->newton_starts,
-                                &rep->scan_step, scan_stop, &c);
+      int rc =
+          ss__scan_period1(m, 2 + f, dmax, h, roots, SCAN_MAX_ROOTS, &nr,
+                           rejected, &n_rejected, &rep->newton_starts,
+                           &rep->scan_cells, &rep->scan_step, scan_stop, &c);
       rep->scan_box = dmax;
       if (rc == SS_ENOMEM)
         return ss__fail(d, rc, "", 0, "out of memory in the orbit search");

@@ -42,46 +42,57 @@ static void eig2(const double J[2][2], double re[2], double im[2]) {
   }
 }
 
-int ss_poincare(const ss_model *m, const double s[2], int turns,
-                size_t max_events, double out[2], ss_mode *modes,
-                double *durations, int *n_phases) {
+int ss__returns_start(ss__returns *r, const ss_model *m, const double s[2]) {
   const ss_params *p = &m->p;
   double z[4] = {s[0], s[0] + (p->ur - p->us) / p->chi, s[1], p->V}, x[4];
-  ss_sim sim;
-  ss_event ev;
-  int rc, np = 0, done = 0;
-  double t_last = 0;
   ss_z_to_x(m, z, x);
-  if ((rc = ss__sim_init_mode(&sim, m, 0, x, SS_MODE_SLIP, NULL)))
-    return rc;
-  for (size_t k = 0; k < max_events; k++) {
-    double t_stop = ss_sim_time(&sim) + MAP_HORIZON;
-    ss_mode cur = sim.mode;
-    rc = ss_sim_next_event(&sim, t_stop, &ev);
+  r->t_last = 0;
+  r->np = 0;
+  return ss__sim_init_mode(&r->sim, m, 0, x, SS_MODE_SLIP, NULL);
+}
+
+int ss__returns_next(ss__returns *r, size_t *events_left, double out[2],
+                     ss_mode *modes, double *durations) {
+  ss_event ev;
+  while (*events_left > 0) {
+    (*events_left)--;
+    double t_stop = ss_sim_time(&r->sim) + MAP_HORIZON;
+    ss_mode cur = r->sim.mode;
+    int rc = ss_sim_next_event(&r->sim, t_stop, &ev);
     if (rc)
-      return rc == SS_HORIZON ? SS_HORIZON : rc;
+      return rc;
     if (ev.from == ev.to) /* a stick grazing does not end the phase */
       continue;
     if (modes && durations) {
-      if (np >= SS_MAX_PHASES)
+      if (r->np >= SS_MAX_PHASES)
         return SS_ELIMIT_EVENTS;
-      modes[np] = cur;
-      durations[np] = ev.t - t_last;
+      modes[r->np] = cur;
+      durations[r->np] = ev.t - r->t_last;
     }
-    np++;
-    t_last = ev.t;
+    r->np++;
+    r->t_last = ev.t;
     if (ev.from == SS_MODE_STICK && ev.to == SS_MODE_SLIP &&
-        ev.kind == SS_EVENT_TRANSITION && ++done == turns) {
+        ev.kind == SS_EVENT_TRANSITION) {
       double ze[4];
-      ss_x_to_z(m, ev.x, ze);
+      ss_x_to_z(r->sim.m, ev.x, ze);
       out[0] = ze[0];
       out[1] = ze[2];
-      if (n_phases)
-        *n_phases = np;
       return SS_OK;
     }
   }
   return SS_ELIMIT_EVENTS;
+}
+
+int ss_poincare(const ss_model *m, const double s[2], int turns,
+                size_t max_events, double out[2], ss_mode *modes,
+                double *durations, int *n_phases) {
+  ss__returns r;
+  int rc = ss__returns_start(&r, m, s);
+  for (int done = 0; done < turns && rc == SS_OK; done++)
+    rc = ss__returns_next(&r, &max_events, out, modes, durations);
+  if (rc == SS_OK && n_phases)
+    *n_phases = r.np;
+  return rc;
 }
 
 /* Passes through Sigma0 of a sequence: the sticks that end into slip (the

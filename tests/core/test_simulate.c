@@ -553,8 +553,52 @@ static void test_cancel(void) {
   ASSERT_TRUE(c.polls >= 1);
 }
 
+/* ss_poincare over k turns runs one simulation through them (each event
+ * found from the last one's certificate); k calls of one turn restart on
+ * Sigma0 each time.  On the paper's set, whose motions settle on its two
+ * stable orbits, the two agree after 100 turns to rounding; the phases of
+ * a 3-turn call are those of 3 one-turn calls; the event budget covers
+ * all the turns. */
+static void test_poincare_turns(void) {
+  ss_params p = {0.2, 4, 0.0724, 0.6178, 1};
+  ss_model m;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  double L = (p.ur - p.us) / p.chi, worst = 0;
+  const double seeds[4][2] = {{0, -0.8}, {0.5 * L, 0.8}, {-L, 0}, {L, -1.6}};
+  for (int i = 0; i < 4; i++) {
+    double a[2] = {seeds[i][0], seeds[i][1]}, b[2];
+    for (int k = 0; k < 100; k++)
+      ASSERT_EQ_INT(ss_poincare(&m, a, 1, 64, a, NULL, NULL, NULL), SS_OK);
+    ASSERT_EQ_INT(ss_poincare(&m, seeds[i], 100, 6400, b, NULL, NULL, NULL),
+                  SS_OK);
+    worst = fmax(worst, fabs(a[0] - b[0]) + fabs(a[1] - b[1]));
+  }
+  printf("poincare: 100 turns in one simulation against 100 restarts: %.2g\n",
+         worst);
+  ASSERT_TRUE(worst < 1e-10 * L);
+  ss_mode mo[SS_MAX_PHASES], m1[SS_MAX_PHASES];
+  const double s0[2] = {0.3, -0.5};
+  double du[SS_MAX_PHASES], d1[SS_MAX_PHASES], s[2] = {s0[0], s0[1]}, e[2];
+  int n = 0, n1 = 0;
+  ASSERT_EQ_INT(ss_poincare(&m, s, 3, 192, e, mo, du, &n), SS_OK);
+  for (int k = 0; k < 3; k++) {
+    int nk = 0;
+    ASSERT_EQ_INT(ss_poincare(&m, s, 1, 64, s, m1 + n1, d1 + n1, &nk), SS_OK);
+    n1 += nk;
+  }
+  ASSERT_EQ_INT(n, n1);
+  for (int k = 0; k < n && k < n1; k++) {
+    ASSERT_TRUE(mo[k] == m1[k]);
+    ASSERT_NEAR(du[k], d1[k], 1e-9);
+  }
+  /* n events at least make those n phases */
+  ASSERT_EQ_INT(ss_poincare(&m, s0, 3, (size_t)n - 1, e, NULL, NULL, NULL),
+                SS_ELIMIT_EVENTS);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
+  test_poincare_turns();
   test_cancel();
   test_paper_run();
   test_battery();
