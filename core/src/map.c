@@ -10,9 +10,10 @@
  * neighbours back on the work list, so a family spreads over every cell of
  * its region that it reaches from a cell where it was found, around corners
  * and across the whole grid.  A neighbour's orbit that does not continue
- * into a cell that has no orbit of its sequence marks the edge of a family
- * (a grazing, a fold): the full search runs there too, for what begins where
- * another family ends, and the spreading goes on from what it finds.
+ * into a cell that, when the spreading is done, has no orbit of its sequence
+ * marks the edge of a family (a grazing, a fold): the full search runs there
+ * too, for what begins where another family ends, and the spreading goes on
+ * from what it finds.
  *
  * Each neighbour's orbits are tried once per cell (a cell remembers how
  * many of each neighbour's orbits it has tried; orbits are only ever
@@ -37,6 +38,12 @@ typedef struct work {
   unsigned char queued, searched, ended;
 } work;
 
+/* A neighbour's orbit that did not continue into a cell: orbit t of cell
+ * nb, tried in cell. */
+typedef struct failure {
+  int cell, nb, t;
+} failure;
+
 typedef struct mapper {
   const ss_params *p;
   const ss_map_opts *o;
@@ -46,6 +53,8 @@ typedef struct mapper {
   int head, count;
   unsigned kinds;
   int max_period, effort, max_orbits, threads;
+  failure *failed; /* since the last edge searches */
+  int n_failed, max_failed;
   double t_start;
   int stopped;
 } mapper;
@@ -325,6 +334,20 @@ static int search_cells(mapper *mp, const int *cells, int n, ss_diag *d) {
   return rc ? rc : mp->stopped;
 }
 
+/* Note that orbit t of cell nb did not continue into cell. */
+static int note_failure(mapper *mp, int cell, int nb, int t) {
+  if (mp->n_failed == mp->max_failed) {
+    int n = mp->max_failed ? 2 * mp->max_failed : 256;
+    failure *g = realloc(mp->failed, (size_t)n * sizeof *g);
+    if (!g)
+      return mp->stopped = SS_ENOMEM;
+    mp->failed = g;
+    mp->max_failed = n;
+  }
+  mp->failed[mp->n_failed++] = (failure){cell, nb, t};
+  return SS_OK;
+}
+
 /* Continue the neighbours' orbits into @a cell. */
 static int visit(mapper *mp, int cell, ss_diag *d) {
   ss_model m;
@@ -332,9 +355,7 @@ static int visit(mapper *mp, int cell, ss_diag *d) {
   if (rc)
     return rc;
   work *w = &mp->w[cell];
-  ss_map_cell *c = &mp->map->cells[cell];
-  const ss_map_orbit *failed[8 * MAP_MAX_ORBITS];
-  int gained = 0, n_failed = 0;
+  int gained = 0;
   for (int k = 0; k < 8 && !mp->stopped; k++) {
     int nb = neighbour(mp->map, cell, k);
     if (nb < 0)
@@ -357,24 +378,36 @@ static int visit(mapper *mp, int cell, ss_diag *d) {
         return mp->stopped = rc;
       if (n == 1)
         gained += add(mp, &m, cell, &o, nb);
-      else if (n_failed < 8 * MAP_MAX_ORBITS)
-        failed[n_failed++] = q;
+      else if (note_failure(mp, cell, nb, t))
+        return mp->stopped;
     }
     w->tried[k] = b->n_orbits;
-  }
-  /* a family ends here where its orbit did not continue from a neighbour
-   * and the cell has no orbit of its sequence from another */
-  for (int f = 0; f < n_failed && !w->ended; f++) {
-    int has = 0;
-    for (int i = 0; i < c->n_orbits && !has; i++)
-      has = c->orbits[i].n_phases == failed[f]->n_phases &&
-            !memcmp(c->orbits[i].modes, failed[f]->modes,
-                    (size_t)failed[f]->n_phases * sizeof failed[f]->modes[0]);
-    w->ended = !has;
   }
   if (gained)
     enqueue_neighbours(mp, cell);
   return SS_OK;
+}
+
+/* Mark where families end, once the spreading is done: a cell that a
+ * neighbour's orbit did not continue into and that has no orbit of its
+ * sequence (from another neighbour, at any time of the spreading: judged
+ * at its end, so the order of the visits does not matter). */
+static void mark_ends(mapper *mp) {
+  for (int f = 0; f < mp->n_failed; f++) {
+    const failure *e = &mp->failed[f];
+    work *w = &mp->w[e->cell];
+    if (w->ended || w->searched)
+      continue;
+    const ss_map_orbit *q = &mp->map->cells[e->nb].orbits[e->t];
+    const ss_map_cell *c = &mp->map->cells[e->cell];
+    int has = 0;
+    for (int i = 0; i < c->n_orbits && !has; i++)
+      has = c->orbits[i].n_phases == q->n_phases &&
+            !memcmp(c->orbits[i].modes, q->modes,
+                    (size_t)q->n_phases * sizeof q->modes[0]);
+    w->ended = !has;
+  }
+  mp->n_failed = 0;
 }
 
 /* Visit the cells on the work list until it is empty. */
@@ -482,6 +515,7 @@ int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
   /* spread; search where families end; spread what that finds */
   while (rc == SS_OK && (rc = spread(&mp, d)) == SS_OK &&
          !opts->no_edge_search) {
+    mark_ends(&mp);
     n_todo = 0;
     for (int c = 0; c < map->n_cells; c++)
       if (mp.w[c].ended && !mp.w[c].searched)
@@ -499,6 +533,7 @@ int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
             sizeof(ss_map_orbit), by_kind_period);
   free(mp.w);
   free(mp.queue);
+  free(mp.failed);
   if (rc == SS_ELIMIT_TIME)
     return ss__fail(d, rc, "max_seconds", opts->max_seconds,
                     "the map ran out of its %g s budget", opts->max_seconds);

@@ -271,11 +271,72 @@ static void test_lattice(void) {
   ss_map_free(&map);
 }
 
+/* Is index i of an axis of n cells on the lattice of full searches (every
+ * apart at most, spread evenly from the first to the last)? */
+static int on_lattice(int i, int n, int every) {
+  long span = n - 1, m = (span + every - 1) / every;
+  long k = (i * m + span / 2) / span;
+  return (k * span + m / 2) / m == i;
+}
+
+/* EVIDENCE: README "POST /map": a full search runs where a neighbour's
+ * orbit does not continue into a cell that has no orbit of its sequence
+ * when the spreading is done; not where such an orbit arrives from another
+ * neighbour later in the spreading.  On the 20x20 overshoot map, every cell
+ * searched off the lattice lacks, among the orbits continued into it, the
+ * sequence of one of its neighbours' orbits (judged at each visit instead,
+ * 15 of its 47 edge searches were needless). */
+static void test_edges(void) {
+  enum { N = 20 };
+  ss_params base = {0.2, 4, 0.0724, 0.6178, 1};
+  ss_map_axis ax[2] = {{SS_PARAM_CHI, 0.04, 0.96, N},
+                       {SS_PARAM_UR, 0.0724 * 1.5, 0.0724 * 15, N}};
+  ss_map_opts mo;
+  memset(&mo, 0, sizeof mo);
+  mo.kinds = SS_ORBIT_OVERSHOOT;
+  mo.threads = 2;
+  ss_map map;
+  ASSERT_EQ_INT(ss_map_run(&base, 2, ax, &mo, &map, NULL), SS_OK);
+  int edges = 0, needless = 0;
+  for (int i = 0; i < N; i++)
+    for (int j = 0; j < N; j++) {
+      const ss_map_cell *c = &map.cells[i * N + j];
+      if (!c->complete || (on_lattice(i, N, 8) && on_lattice(j, N, 8)))
+        continue;
+      edges++;
+      int all = 1; /* every neighbour's sequence continued in */
+      for (int di = -1; di <= 1; di++)
+        for (int dj = -1; dj <= 1; dj++) {
+          int a = i + di, b = j + dj;
+          if ((!di && !dj) || a < 0 || b < 0 || a >= N || b >= N)
+            continue;
+          const ss_map_cell *nb = &map.cells[a * N + b];
+          for (int t = 0; t < nb->n_orbits; t++) {
+            const ss_map_orbit *q = &nb->orbits[t];
+            int has = 0;
+            for (int k = 0; k < c->n_orbits && !has; k++)
+              has = c->orbits[k].from_cell >= 0 &&
+                    c->orbits[k].n_phases == q->n_phases &&
+                    !memcmp(c->orbits[k].modes, q->modes,
+                            (size_t)q->n_phases * sizeof q->modes[0]);
+            all = all && has;
+          }
+        }
+      needless += all;
+    }
+  printf("edges: %d full searches, %d off the lattice, %d needless\n",
+         map.searches, edges, needless);
+  ASSERT_TRUE(edges > 0);
+  ASSERT_EQ_INT(needless, 0);
+  ss_map_free(&map);
+}
+
 int main(int argc, char **argv) {
   const char *env = getenv("SS_MAP_N");
   int N = env ? atoi(env) : argc > 1 ? atoi(argv[1]) : 12;
   test_sweep();
   test_lattice();
+  test_edges();
   test_threads();
   test_grid(N < 3 ? 3 : N);
   TEST_DONE();
