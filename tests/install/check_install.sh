@@ -33,13 +33,15 @@ out=$("$tmp/example_pc")
 case $out in *"$want"*) ;; *) echo "pkg-config build printed: $out"; exit 1 ;; esac
 echo "pkg-config: $(pkg-config --modversion stickslip), $([ -n "$static" ] && echo static || echo shared)"
 
-# find_package
+# find_package, asking for the header's major.minor version (the ABI)
+abi=$(sed -n 's/^#define SS_VERSION_\(MAJOR\|MINOR\) \([0-9]*\)$/\2/p' \
+  "$src/core/include/stickslip.h" | paste -sd.)
 mkdir "$tmp/consumer"
 cp "$src/tests/example/example.c" "$tmp/consumer/"
-cat >"$tmp/consumer/CMakeLists.txt" <<'CM'
+cat >"$tmp/consumer/CMakeLists.txt" <<CM
 cmake_minimum_required(VERSION 3.16)
 project(consumer C)
-find_package(stickslip 0.3 REQUIRED)
+find_package(stickslip $abi REQUIRED)
 add_executable(example example.c)
 target_link_libraries(example PRIVATE stickslip::stickslip)
 CM
