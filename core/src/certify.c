@@ -27,13 +27,20 @@
  * pass over a box X gives an enclosure F(X) and the Jacobian's J(X).
  *
  * A box is
+ *  - narrowed to the starts whose phases keep the rules an orbit's must
+ *    (keep_rules: x2' <= V in the slip, x2' >= V in the overshoot, at
+ *    fixed times before the box's least duration, and the friction each
+ *    free phase ends with, each a linear inequality in s): most roots of
+ *    the equations break one, and need not be isolated;
  *  - excluded when s has no value in it that solves a and b (interval
- *    Gauss-Seidel, which also narrows it; for slip-overshoot-stick with the
- *    stick's duration in its range), when a residual's enclosure misses
- *    zero (the natural one or the mean-value form F(c) + J(X)(X - c)), or
- *    that of the stick's rotation condition |u| = |w|, or of R less its
- *    dependence on s through a and b, or of the closures with s eliminated,
- *    C . (a x b); or when the Krawczyk image K(X) = c - Y F(c)
+ *    Gauss-Seidel, which also narrows it; for slip-overshoot-stick with
+ *    the stick's duration in its range; for a short slip or overshoot also
+ *    with the phase's mean x2'', a / t1 or (b - a) / t2, which stay apart
+ *    where a and b nearly coincide), or keeps no rule; when a residual's
+ *    enclosure misses zero (the natural one or the mean-value form F(c) +
+ *    J(X)(X - c)), or that of the stick's rotation condition |u| = |w|, or
+ *    of R less its dependence on s through a and b, or of the closures with
+ *    s eliminated, C . (a x b); or when the Krawczyk image K(X) = c - Y F(c)
  *    + (I - Y J(X))(X - c), Y = mid(J)^-1, misses X;
  *  - proved to hold exactly one root when K(X) lies inside X's interior;
  *  - otherwise cut to X n K(X) and halved across its widest side (the
@@ -262,13 +269,43 @@ typedef struct problem {
   const ss_model *m;
   int n;  /* 2: slip-stick, 3: slip-overshoot-stick (3 unknowns) */
   int nv; /* unknowns */
-  /* slip from y0(s) = (s1, s1 + k, s2, V): x = Y s + y */
-  lin Y[4][2], y[4];
-  /* overshoot: x = G x0 + g */
-  lin G[4][4], g[4];
+  /* slip from y0(s) = (s1, s1 + k, s2, V): x = Y s + y; the derivatives in
+   * t of row 3 (x2') */
+  lin Y[4][2], y[4], Y3d[2], y3d;
+  /* the forms at t = 0, less what they are in exact arithmetic (rounding
+   * of the modal data): x2' - V of the slip, a row over (s1, s2, 1); row 3
+   * of the overshoot's G - I, then g3 */
+  iv a0[3], q0[5];
+  /* overshoot: x = G x0 + g; the derivatives in t of row 3 (x2') */
+  lin G[4][4], g[4], G3d[4], g3d;
   iv chi, k, V, chiV, chik, omc, Vinv;
   double tau_lo, tau_hi; /* the range of the stick's duration */
+  /* the phases' rules at the times j h, j = 1 .. n_rule (rules_init):
+   * x2' - V after a slip of j h from y0(s), a row over (s1, s2, 1); row 3
+   * of the overshoot's map over j h, G3 (4 entries) then g3 */
+  double h_rule, tol_rule;
+  double t_short; /* below it an overshoot is short (contract_s) */
+  int n_rule;
+  iv (*slip_v)[3], (*over_v)[5];
 } problem;
+
+/* The basis at t: 1, cos w0 t, sin w0 t, cos w1 t, sin w1 t */
+static void basis(const ss_model *m, const ad *t, ad B[5]) {
+  B[0] = ad_const(iv_exact(1));
+  ad_cos_sin(m->w[0], t, &B[1], &B[2]);
+  ad_cos_sin(m->w[1], t, &B[3], &B[4]);
+}
+
+/* The derivative in t of a linear form over the basis */
+static void lin_deriv(const ss_model *m, const lin *L, lin *Ld) {
+  memset(Ld, 0, sizeof *Ld);
+  for (int k = 0; k < 2; k++) {
+    iv w = iv_exact(m->w[k]), sc = L->c[2 + 2 * k], cc = L->c[1 + 2 * k];
+    Ld->c[1 + 2 * k] = iv_mul(sc, w); /* (c cos + s sin)' = s w cos - */
+    iv cw = iv_mul(cc, w);            /*                     c w sin */
+    Ld->c[2 + 2 * k] = (iv){-cw.hi, -cw.lo};
+  }
+}
 
 static void problem_init(problem *P, const ss_model *m, int n) {
   memset(P, 0, sizeof *P);
@@ -304,12 +341,58 @@ static void problem_init(problem *P, const ss_model *m, int n) {
     P->y[i].c[0] = iv_add(P->y[i].c[0], D[i]);
     P->g[i].c[0] = iv_sub(P->g[i].c[0], D[i]);
   }
+  ad t0 = ad_const(iv_exact(0)), B0[5];
+  basis(m, &t0, B0);
+  P->a0[0] = lin_at(&P->Y[3][0], B0).v;
+  P->a0[1] = lin_at(&P->Y[3][1], B0).v;
+  P->a0[2] = iv_sub(lin_at(&P->y[3], B0).v, P->V);
+  for (int l = 0; l < 4; l++)
+    P->q0[l] = iv_sub(lin_at(&P->G[3][l], B0).v, iv_exact(l == 3));
+  P->q0[4] = lin_at(&P->g[3], B0).v;
+  for (int l = 0; l < 8; l++) {
+    const lin *L = l < 4    ? &P->G[3][l]
+                   : l == 4 ? &P->g[3]
+                   : l < 7  ? &P->Y[3][l - 5]
+                            : &P->y[3];
+    lin *Ld = l < 4    ? &P->G3d[l]
+              : l == 4 ? &P->g3d
+              : l < 7  ? &P->Y3d[l - 5]
+                       : &P->y3d;
+    lin_deriv(m, L, Ld);
+  }
 }
 
-static void basis(const ss_model *m, const ad *t, ad B[5]) {
-  B[0] = ad_const(iv_exact(1));
-  ad_cos_sin(m->w[0], t, &B[1], &B[2]);
-  ad_cos_sin(m->w[1], t, &B[3], &B[4]);
+/* The rules' rows at the times j h up to tmax (h about 0.3 rad of the
+ * fastest motion, as the scan's grid); 0, or SS_ENOMEM. */
+static int rules_init(problem *P, double tmax) {
+  const ss_model *m = P->m;
+  const ss_params *p = &m->p;
+  P->h_rule = 0.3 / fmax(m->w[1], 1.0);
+  P->t_short = 1.0 / m->w[1];
+  P->n_rule = (int)fmin(ceil(tmax / P->h_rule), 100000);
+  P->tol_rule = 1e-9 * fmax(p->V, (p->ur - p->us) / p->chi);
+  P->slip_v = malloc((size_t)(P->n_rule + 1) * sizeof *P->slip_v);
+  P->over_v = malloc((size_t)(P->n_rule + 1) * sizeof *P->over_v);
+  if (!P->slip_v || !P->over_v)
+    return SS_ENOMEM;
+  for (int j = 1; j <= P->n_rule; j++) {
+    ad t = ad_const(iv_exact((double)j * P->h_rule)), B[5];
+    basis(m, &t, B);
+    for (int c = 0; c < 2; c++)
+      P->slip_v[j][c] = lin_at(&P->Y[3][c], B).v;
+    P->slip_v[j][2] = iv_sub(lin_at(&P->y[3], B).v, P->V);
+    for (int l = 0; l < 4; l++)
+      P->over_v[j][l] = lin_at(&P->G[3][l], B).v;
+    P->over_v[j][4] = lin_at(&P->g[3], B).v;
+  }
+  return 0;
+}
+
+static void problem_free(problem *P) {
+  free(P->slip_v);
+  free(P->over_v);
+  P->slip_v = NULL;
+  P->over_v = NULL;
 }
 
 static ad ad_var(iv x, int i) {
@@ -327,6 +410,7 @@ static ad ad_var(iv x, int i) {
  * conditions x2' = V at the slip's and the overshoot's end. */
 typedef struct ends {
   ad x[4][3];
+  ad xs[4][3]; /* the slip's end (for slip-stick, x) */
   ad a[3], b[3];
   /* slip-overshoot-stick: V times the stick's duration, c . (s1, s2, 1) */
   ad c[3];
@@ -345,6 +429,7 @@ static void free_ends(const problem *P, const iv *X, ends *e) {
   e->a[0] = e->x[3][0];
   e->a[1] = e->x[3][1];
   e->a[2] = ad_sub(&e->x[3][2], &Vc);
+  memcpy(e->xs, e->x, sizeof e->xs);
   ad t2 = ad_var(X[1], 1);
   if (P->n == 2) {
     /* the stick's end: x2 + V t2 = s1 + k */
@@ -517,18 +602,14 @@ static int narrow(iv r, iv a0, iv a1, iv *s, int v) {
   return 1;
 }
 
-/* Narrow s = (X[nt], X[nt + 1]) to the solutions of the two linear
- * conditions on it (a, b) over the durations of X: interval Gauss-Seidel,
- * preconditioned by the inverse of the midpoint matrix.  0 when no s of X
- * solves them. */
-static int contract_s(const problem *P, const ends *e, iv *s) {
-  iv A[2][2], r[2];
-  const ad *w[2] = {e->a, e->b};
-  for (int i = 0; i < 2; i++) {
-    A[i][0] = w[i][0].v;
-    A[i][1] = w[i][1].v;
-    r[i] = (iv){-w[i][2].v.hi, -w[i][2].v.lo};
-  }
+/* One pass of interval Gauss-Seidel on s = (s1, s2) with the rows w0 and
+ * w1 (over (s1, s2, 1)), preconditioned by the inverse of their midpoint
+ * matrix, and (slip-overshoot-stick) the stick's duration in its range.
+ * 0 when s is left empty. */
+static int gauss_seidel(const problem *P, const ends *e, const iv *w0,
+                        const iv *w1, iv *s) {
+  iv A[2][2] = {{w0[0], w0[1]}, {w1[0], w1[1]}};
+  iv r[2] = {{-w0[2].hi, -w0[2].lo}, {-w1[2].hi, -w1[2].lo}};
   double M[4] = {iv_mid(A[0][0]), iv_mid(A[0][1]), iv_mid(A[1][0]),
                  iv_mid(A[1][1])},
          Y[4];
@@ -557,6 +638,60 @@ static int contract_s(const problem *P, const ends *e, iv *s) {
       if (P->n == 3 && !narrow(rt, e->c[v].v, e->c[1 - v].v, s, v))
         return 0;
     }
+  return 1;
+}
+
+/* Narrow s = (X[nt], X[nt + 1]) to the solutions of the two linear
+ * conditions on it (a, b) over the durations of X.  0 when no s of X
+ * solves them.
+ * A short phase: a = x2'(t1) - x2'(0) over the slip (x2'(0) = V on
+ * Sigma0), and for slip-overshoot-stick b - a = x2'(t2) - x2'(0) over the
+ * overshoot, are nearly zero for every s, so they leave s loose.  a / t1
+ * and (b - a) / t2, the phases' mean x2'' (rows over (s1, s2, 1)), have
+ * the same solutions for t1, t2 > 0.  By the mean value theorem each of
+ * their entries lies in the hull of the entry's derivative over [0, t],
+ * which the rows Y3' s + y3' and G3' x + g3' (x the slip's end) give, plus
+ * the forms' value at t = 0 (zero but for the rounding of the modal data)
+ * over t.  Each pair of a or a / t1 with b or (b - a) / t2 that applies
+ * narrows s in turn. */
+static int contract_s(const problem *P, const ends *e, const iv *X, iv *s) {
+  iv rows[4][3];
+  int na = 1, nb = 1;
+  for (int c = 0; c < 3; c++) {
+    rows[0][c] = e->a[c].v;
+    rows[2][c] = e->b[c].v;
+  }
+  if (X[0].lo > 0 && X[0].hi < P->t_short) {
+    ad tt = ad_const((iv){0, X[0].hi}), B[5];
+    basis(P->m, &tt, B);
+    rows[1][0] = lin_at(&P->Y3d[0], B).v;
+    rows[1][1] = lin_at(&P->Y3d[1], B).v;
+    rows[1][2] = lin_at(&P->y3d, B).v;
+    for (int c = 0; c < 3; c++)
+      rows[1][c] = iv_add(rows[1][c], iv_div(P->a0[c], X[0]));
+    na = 2;
+  }
+  if (P->n == 3 && X[1].lo > 0 && X[1].hi < P->t_short) {
+    ad tt = ad_const((iv){0, X[1].hi}), B[5];
+    basis(P->m, &tt, B);
+    iv *q = rows[3], q0[3] = {{0, 0}, {0, 0}, P->q0[4]};
+    q[0] = q[1] = iv_exact(0);
+    q[2] = lin_at(&P->g3d, B).v;
+    for (int l = 0; l < 4; l++) {
+      iv gl = lin_at(&P->G3d[l], B).v;
+      for (int c = 0; c < 3; c++) {
+        q[c] = iv_add(q[c], iv_mul(gl, e->xs[l][c].v));
+        q0[c] = iv_add(q0[c], iv_mul(P->q0[l], e->xs[l][c].v));
+      }
+    }
+    for (int c = 0; c < 3; c++)
+      q[c] = iv_add(q[c], iv_div(q0[c], X[1]));
+    nb = 2;
+  }
+  for (int i = 0; i < na; i++)
+    for (int j = 0; j < nb; j++)
+      if (!gauss_seidel(P, e, rows[i], rows[2 + j], s))
+        return 0;
   return 1;
 }
 
@@ -643,13 +778,92 @@ static int reduced_excludes(const problem *P, const ends *e, const ends *ec,
   return 0;
 }
 
+/* The row of chi (x2 - x1) at the state x (rows over (s1, s2, 1)): the
+ * friction the stick would need, times sg */
+static void force_row(const problem *P, const ad x[4][3], double sg, iv w[3]) {
+  iv c = iv_mul(iv_exact(sg), P->chi);
+  for (int k = 0; k < 3; k++)
+    w[k] = iv_mul(c, iv_sub(x[1][k].v, x[0][k].v));
+}
+
+/* Narrow s to the points where w . (s1, s2, 1) <= r may hold: w_v s_v <=
+ * r - w2 - w_(1-v) s_(1-v) bounds s_v above where w_v > 0, below where w_v
+ * < 0.  0 when s is left empty. */
+static int narrow_le(const iv w[3], double r, iv *s) {
+  for (int v = 0; v < 2; v++) {
+    iv q = iv_sub(iv_sub(iv_exact(r), w[2]), iv_mul(w[1 - v], s[1 - v]));
+    if (w[v].lo > 0) {
+      iv x = iv_div(q, w[v]);
+      if (x.hi < s[v].hi)
+        s[v].hi = x.hi;
+    } else if (w[v].hi < 0) {
+      iv x = iv_div(q, w[v]);
+      if (x.lo > s[v].lo)
+        s[v].lo = x.lo;
+    }
+    if (!(s[v].lo <= s[v].hi)) /* also a NAN */
+      return 0;
+  }
+  return 1;
+}
+
+/* Keep s in X to where its phases may keep the rules they must keep to be
+ * an orbit (to tol_rule): the slip keeps x2' <= V (at the times j h before
+ * the least t1), and ends with |f| <= ur into stick (slip-stick) or with
+ * f <= -ur into overshoot (3.2; f = chi (x2 - x1)); the overshoot keeps
+ * x2' >= V (at the times j h before the least t2) and ends with |f| <= ur.
+ * Each is linear in s for given durations, so it narrows s as a linear
+ * inequality.  A root of the equations where one of them fails is not an
+ * orbit, so no orbit is lost; most roots are of that kind (scan.c: at chi
+ * 0.96 all but 190 of 4391 have a slip that reaches V before its end), and
+ * the proof need not isolate them.  0 when no s is left. */
+static int keep_rules(const problem *P, const ends *e, iv *X) {
+  iv *S = &X[P->nv - 2], w[3];
+  double tol = P->tol_rule, ur = P->m->p.ur, V = P->m->p.V, h = P->h_rule;
+  int last = (int)fmin(X[0].lo / h, P->n_rule);
+  for (int j = last; j >= 1; j--)
+    if ((double)j * h < X[0].lo && !narrow_le(P->slip_v[j], tol, S))
+      return 0;
+  force_row(P, e->xs, 1, w);
+  if (!narrow_le(w, P->n == 2 ? ur + tol : -ur + tol, S))
+    return 0;
+  if (P->n == 2) {
+    force_row(P, e->xs, -1, w);
+    return narrow_le(w, ur + tol, S);
+  }
+  force_row(P, e->x, 1, w);
+  if (!narrow_le(w, ur + tol, S))
+    return 0;
+  force_row(P, e->x, -1, w);
+  if (!narrow_le(w, ur + tol, S))
+    return 0;
+  last = (int)fmin(X[1].lo / h, P->n_rule);
+  for (int j = last; j >= 1; j--) {
+    if (!((double)j * h < X[1].lo))
+      continue;
+    /* V - x2' <= tol */
+    const iv *g = P->over_v[j];
+    for (int c = 0; c < 3; c++) {
+      iv v = c == 2 ? g[4] : iv_exact(0);
+      for (int l = 0; l < 4; l++)
+        v = iv_add(v, iv_mul(g[l], e->xs[l][c].v));
+      w[c] = (iv){-v.hi, -v.lo};
+    }
+    if (!narrow_le(w, tol - V, S))
+      return 0;
+  }
+  return 1;
+}
+
 /* What one box is: 0 no root, 1 exactly one root (its enclosure into E),
  * 2 not decided (X then cut to what may hold roots, K n X). */
 static int box_test(const problem *P, iv *X, iv *E) {
   int nv = P->nv, nt = nv - 2;
   ends e, ec;
   free_ends(P, X, &e);
-  if (!contract_s(P, &e, &X[nt]))
+  if (!contract_s(P, &e, X, &X[nt]))
+    return 0;
+  if (P->slip_v && (!keep_rules(P, &e, X) || !contract_s(P, &e, X, &X[nt])))
     return 0;
   /* the middle, where the mean-value forms are centred (the free phases'
    * ends depend on the durations alone) */
@@ -858,8 +1072,11 @@ int ss__certify_period1(const ss_model *m, int n, const double lo[4],
     W[i] = hi[i] - lo[i];
   }
   iv(*stack)[NV] = malloc(STACK_MAX * sizeof *stack);
-  if (!stack)
+  if (!stack || rules_init(&P, fmax(hi[0], hi[1]))) {
+    free(stack);
+    problem_free(&P);
     return SS_ENOMEM;
+  }
   for (int i = 0; i < nv; i++)
     stack[0][i] = (iv){lo[i], hi[i]};
   int top = 1, rc = SS_OK;
@@ -943,6 +1160,7 @@ int ss__certify_period1(const ss_model *m, int n, const double lo[4],
     out->budget_spent = 1;
   out->complete = rc == SS_OK && !out->budget_spent && out->n_undecided == 0;
   free(stack);
+  problem_free(&P);
   return rc;
 }
 

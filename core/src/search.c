@@ -208,7 +208,11 @@ static void try_solve(collect *c, int n, const ss_mode *modes,
  * orbit missing from the search's solved and added, and every orbit of the
  * family the search returned inside the box found among the roots. */
 #define CERT_STATE_BOX 100.0 /* the start box, in units of max(V, ur/chi) */
-#define CERT_SLIP_MIN 1e-2   /* the slip's least duration, in fast periods */
+/* the least duration of a slip and of an overshoot, in fast periods: at
+ * zero slip (and stick) every start closes, and an overshoot of zero
+ * length is the grazing where the overshoot appears, where the two
+ * conditions x2' = V coincide */
+#define CERT_SLIP_MIN 1e-2
 
 typedef struct cert_cls {
   collect *c;
@@ -237,21 +241,23 @@ static void certify_family(collect *c, int f, double dmax, double seconds,
   int n = 2 + f;
   double L = CERT_STATE_BOX * fmax(p->V, p->ur / p->chi);
   double tlo = CERT_SLIP_MIN * SS_TWO_PI / m->w[1];
-  /* the phases after the slip reach a little below zero, so that a root
-   * with such a phase of length zero lies inside and is proved (and
-   * rejected), not left on the face */
+  /* the stick reaches a little below zero, so that a root with a stick of
+   * length zero lies inside and is proved (and rejected), not left on the
+   * face; so does the slip-stick's */
   double below = -1e-3 * dmax;
   memset(fc, 0, sizeof *fc);
   fc->ran = 1;
   fc->n_phases = n;
   fc->duration_lo[0] = tlo;
+  if (n == 3)
+    fc->duration_lo[1] = tlo;
   for (int k = 0; k < n; k++)
     fc->duration_hi[k] = dmax;
   fc->x1_lo = m->d0[0] - L;
   fc->x1_hi = m->d0[0] + L;
   fc->v1_lo = -L;
   fc->v1_hi = L;
-  double lo[4] = {tlo, below, fc->x1_lo, fc->v1_lo};
+  double lo[4] = {tlo, n == 3 ? tlo : below, fc->x1_lo, fc->v1_lo};
   double hi[4] = {dmax, dmax, fc->x1_hi, fc->v1_hi};
   double t0 = ss__now();
   cert_cls cc = {c, t0 + seconds};
