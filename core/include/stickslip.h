@@ -698,7 +698,10 @@ typedef struct ss_family_cert {
   int n_phases; /**< 2 slip-stick, 3 slip-overshoot-stick */
   double duration_lo[3], duration_hi[3];
   double x1_lo, x1_hi, v1_lo, v1_hi;
-  int roots;    /**< roots of the duration equations proved in the box */
+  /** roots of the duration equations proved in the box, of those whose
+   *  start keeps the rules the phases of an orbit keep (the others are
+   *  excluded without being isolated) */
+  int roots;
   int orbits;   /**< of them feasible orbits, all returned */
   int rejected; /**< of them not orbits */
   int added;    /**< orbits the other sources had missed, added */
