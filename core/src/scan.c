@@ -446,6 +446,18 @@ static int newton(scan *sc, double t1, double t2, double h) {
   return 1;
 }
 
+/* Do the four values keep one sign by more than half their spread?  As
+ * fmin and fmax would, a NAN is passed over; with none finite, not said. */
+static int keeps_sign(const double v[4]) {
+  double lo = INFINITY, hi = -INFINITY;
+  for (int k = 0; k < 4; k++) {
+    lo = v[k] < lo ? v[k] : lo;
+    hi = v[k] > hi ? v[k] : hi;
+  }
+  return isfinite(lo) && isfinite(hi) &&
+         (lo > 0.5 * (hi - lo) || hi < -0.5 * (hi - lo));
+}
+
 /* Do the corners' E reach zero within half their spread?  A root needs
  * E = 0 (the stick is a rotation), wherever the stick's duration turns, so
  * a cell whose E keeps one sign has none.  E not finite at a corner: not
@@ -454,27 +466,14 @@ static int newton(scan *sc, double t1, double t2, double h) {
  * slip-stick cells it lost one of the search battery's orbits at effort 1,
  * so those go by the residual alone. */
 static int e_reaches_zero(point *const c[4]) {
-  double lo = INFINITY, hi = -INFINITY;
-  for (int k = 0; k < 4; k++) {
-    /* as fmin and fmax, a NAN is passed over */
-    double E = c[k]->E;
-    lo = E < lo ? E : lo;
-    hi = E > hi ? E : hi;
-  }
-  return !(isfinite(lo) && isfinite(hi) &&
-           (lo > 0.5 * (hi - lo) || hi < -0.5 * (hi - lo)));
+  double v[4] = {c[0]->E, c[1]->E, c[2]->E, c[3]->E};
+  return !keeps_sign(v);
 }
 
 /* Do the corners' n3 keep one sign by more than half their spread? */
-static int keeps_sign(point *const c[4]) {
-  double lo = INFINITY, hi = -INFINITY;
-  for (int k = 0; k < 4; k++) {
-    double v = c[k]->n3;
-    lo = v < lo ? v : lo;
-    hi = v > hi ? v : hi;
-  }
-  return isfinite(lo) && isfinite(hi) &&
-         (lo > 0.5 * (hi - lo) || hi < -0.5 * (hi - lo));
+static int n3_keeps_sign(point *const c[4]) {
+  double v[4] = {c[0]->n3, c[1]->n3, c[2]->n3, c[3]->n3};
+  return keeps_sign(v);
 }
 
 /* Does the slip break its rule (x2' < V) at one grid time j h before a1,
@@ -629,7 +628,7 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2, point *c0,
    * corners' values out to an infinity, never into the box (for n3 and det
    * linear in the cell, n3 / det has no extremum inside it; the margin of
    * half the spread, as for E, is for their curvature) */
-  if (!near && (!across || keeps_sign(c)))
+  if (!near && (!across || n3_keeps_sign(c)))
     return;
   /* away from a pole, E must reach zero in the cell, and the slip keep its
    * rule */
