@@ -369,8 +369,9 @@ static int rules_init(problem *P, double tmax) {
   const ss_params *p = &m->p;
   P->h_rule = 0.3 / fmax(m->w[1], 1.0);
   P->t_short = 1.0 / m->w[1];
-  P->n_rule = (int)fmin(ceil(tmax / P->h_rule), 100000);
-  P->tol_rule = 1e-9 * fmax(p->V, (p->ur - p->us) / p->chi);
+  P->n_rule = (int)fmax(0, fmin(ceil(tmax / P->h_rule), 100000));
+  /* velocities, displacements and forces alike */
+  P->tol_rule = 1e-9 * fmax(fmax(p->V, (p->ur - p->us) / p->chi), p->ur);
   P->slip_v = malloc((size_t)(P->n_rule + 1) * sizeof *P->slip_v);
   P->over_v = malloc((size_t)(P->n_rule + 1) * sizeof *P->over_v);
   if (!P->slip_v || !P->over_v)
@@ -1133,7 +1134,9 @@ int ss__certify_period1(const ss_model *m, int n, const double lo[4],
         if (rh == 0)
           continue; /* H, and X in it, holds no root */
         if (rh == 1) {
-          int k = add_root(out, nv, H, EH);
+          /* unique in Hc, which box_test narrowed: by the phases' rules
+           * too, so a root that breaks one may lie in H outside Hc */
+          int k = add_root(out, nv, Hc, EH);
           if (k == -2) {
             rc = SS_ENOMEM;
             break;

@@ -347,8 +347,9 @@ static void certify_family(collect *c, int f, double dmax, double seconds,
       continue;
     double u[4] = {b->durations[0], b->durations[1], b->x0[0], b->x0[2]};
     int inside = u[0] >= tlo && u[0] <= dmax && u[1] <= dmax &&
-                 b->durations[n - 1] <= dmax && u[2] >= fc->x1_lo &&
-                 u[2] <= fc->x1_hi && u[3] >= fc->v1_lo && u[3] <= fc->v1_hi;
+                 (n == 2 || u[1] >= tlo) && b->durations[n - 1] <= dmax &&
+                 u[2] >= fc->x1_lo && u[2] <= fc->x1_hi && u[3] >= fc->v1_lo &&
+                 u[3] <= fc->v1_hi;
     int found = 0;
     for (int r = 0; r < ce.n_roots && !found; r++)
       found = in_root(&ce.roots[r], u);
