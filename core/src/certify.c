@@ -28,10 +28,11 @@
  *
  * A box is
  *  - narrowed to the starts whose phases keep the rules an orbit's must
- *    (keep_rules: x2' <= V in the slip, x2' >= V in the overshoot, at
- *    fixed times before the box's least duration, and the friction each
- *    free phase ends with, each a linear inequality in s): most roots of
- *    the equations break one, and need not be isolated;
+ *    (keep_rules: x2' <= V in the slip, x2' >= V in the overshoot and
+ *    |f| <= ur in the stick, at fixed times before the box's least
+ *    duration, and the friction each free phase ends with, each a linear
+ *    inequality in s): most roots of the equations break one, and need not
+ *    be isolated;
  *  - excluded when s has no value in it that solves a and b (interval
  *    Gauss-Seidel, which also narrows it; for slip-overshoot-stick with
  *    the stick's duration in its range; for a short slip or overshoot also
@@ -808,6 +809,44 @@ static int narrow_le(const iv w[3], double r, iv *s) {
   return 1;
 }
 
+/* The stick keeps |f| <= ur at the times j h before its least duration
+ * (t2 for slip-stick; for slip-overshoot-stick V t3 = c . (s, 1)): x2 =
+ * x2s + V t and c = x1 - chi x2 = Ac cos t + Bc sin t from the stick's
+ * start, so f(t) = chi ((1 - chi) x2 - c) is a row over (s1, s2, 1) at each
+ * such t.  0 when no s is left. */
+static int keep_stick(const problem *P, const ends *e, const iv *X, iv *S) {
+  double tol = P->tol_rule, ur = P->m->p.ur, h = P->h_rule;
+  iv t3 = X[1];
+  if (P->n == 3) {
+    iv vt = iv_add(iv_add(iv_mul(e->c[0].v, S[0]), iv_mul(e->c[1].v, S[1])),
+                   e->c[2].v);
+    t3 = iv_mul(P->Vinv, vt);
+  }
+  int last = (int)fmin(t3.lo / h, P->n_rule);
+  for (int j = last; j >= 1; j--) {
+    double t = (double)j * h;
+    if (!(t < t3.lo))
+      continue;
+    iv co = iv_cos(iv_exact(t)), si = iv_sin(iv_exact(t)), w[3];
+    for (int c = 0; c < 3; c++) {
+      iv x2 = e->x[1][c].v;
+      iv ac = iv_sub(e->x[0][c].v, iv_mul(P->chi, x2));
+      iv bc = c == 2 ? iv_sub(e->x[2][c].v, P->chiV) : e->x[2][c].v;
+      if (c == 2)
+        x2 = iv_add(x2, iv_mul(P->V, iv_exact(t)));
+      iv r = iv_sub(iv_mul(P->omc, x2), iv_add(iv_mul(ac, co), iv_mul(bc, si)));
+      w[c] = iv_mul(P->chi, r);
+    }
+    if (!narrow_le(w, ur + tol, S))
+      return 0;
+    for (int c = 0; c < 3; c++)
+      w[c] = (iv){-w[c].hi, -w[c].lo};
+    if (!narrow_le(w, ur + tol, S))
+      return 0;
+  }
+  return 1;
+}
+
 /* Keep s in X to where its phases may keep the rules they must keep to be
  * an orbit (to tol_rule): the slip keeps x2' <= V (at the times j h before
  * the least t1), and ends with |f| <= ur into stick (slip-stick) or with
@@ -830,7 +869,7 @@ static int keep_rules(const problem *P, const ends *e, iv *X) {
     return 0;
   if (P->n == 2) {
     force_row(P, e->xs, -1, w);
-    return narrow_le(w, ur + tol, S);
+    return narrow_le(w, ur + tol, S) && keep_stick(P, e, X, S);
   }
   force_row(P, e->x, 1, w);
   if (!narrow_le(w, ur + tol, S))
@@ -853,7 +892,7 @@ static int keep_rules(const problem *P, const ends *e, iv *X) {
     if (!narrow_le(w, tol - V, S))
       return 0;
   }
-  return 1;
+  return keep_stick(P, e, X, S);
 }
 
 /* What one box is: 0 no root, 1 exactly one root (its enclosure into E),
