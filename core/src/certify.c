@@ -288,6 +288,7 @@ typedef struct problem {
   double t_short; /* below it an overshoot is short (contract_s) */
   int n_rule;
   iv (*slip_v)[3], (*over_v)[5];
+  iv (*stick_cs)[2]; /* cos and sin of j h, for the stick's rotation */
 } problem;
 
 /* The basis at t: 1, cos w0 t, sin w0 t, cos w1 t, sin w1 t */
@@ -375,7 +376,8 @@ static int rules_init(problem *P, double tmax) {
   P->tol_rule = 1e-9 * fmax(fmax(p->V, (p->ur - p->us) / p->chi), p->ur);
   P->slip_v = malloc((size_t)(P->n_rule + 1) * sizeof *P->slip_v);
   P->over_v = malloc((size_t)(P->n_rule + 1) * sizeof *P->over_v);
-  if (!P->slip_v || !P->over_v)
+  P->stick_cs = malloc((size_t)(P->n_rule + 1) * sizeof *P->stick_cs);
+  if (!P->slip_v || !P->over_v || !P->stick_cs)
     return SS_ENOMEM;
   for (int j = 1; j <= P->n_rule; j++) {
     ad t = ad_const(iv_exact((double)j * P->h_rule)), B[5];
@@ -386,6 +388,8 @@ static int rules_init(problem *P, double tmax) {
     for (int l = 0; l < 4; l++)
       P->over_v[j][l] = lin_at(&P->G[3][l], B).v;
     P->over_v[j][4] = lin_at(&P->g[3], B).v;
+    P->stick_cs[j][0] = iv_cos(iv_exact((double)j * P->h_rule));
+    P->stick_cs[j][1] = iv_sin(iv_exact((double)j * P->h_rule));
   }
   return 0;
 }
@@ -393,8 +397,10 @@ static int rules_init(problem *P, double tmax) {
 static void problem_free(problem *P) {
   free(P->slip_v);
   free(P->over_v);
+  free(P->stick_cs);
   P->slip_v = NULL;
   P->over_v = NULL;
+  P->stick_cs = NULL;
 }
 
 static ad ad_var(iv x, int i) {
@@ -822,12 +828,12 @@ static int keep_stick(const problem *P, const ends *e, const iv *X, iv *S) {
                    e->c[2].v);
     t3 = iv_mul(P->Vinv, vt);
   }
-  int last = (int)fmin(t3.lo / h, P->n_rule);
+  int last = (int)fmax(0, fmin(t3.lo / h, P->n_rule));
   for (int j = last; j >= 1; j--) {
     double t = (double)j * h;
     if (!(t < t3.lo))
       continue;
-    iv co = iv_cos(iv_exact(t)), si = iv_sin(iv_exact(t)), w[3];
+    iv co = P->stick_cs[j][0], si = P->stick_cs[j][1], w[3];
     for (int c = 0; c < 3; c++) {
       iv x2 = e->x[1][c].v;
       iv ac = iv_sub(e->x[0][c].v, iv_mul(P->chi, x2));
@@ -877,7 +883,7 @@ static int keep_rules(const problem *P, const ends *e, iv *X) {
   force_row(P, e->x, -1, w);
   if (!narrow_le(w, ur + tol, S))
     return 0;
-  last = (int)fmin(X[1].lo / h, P->n_rule);
+  last = (int)fmax(0, fmin(X[1].lo / h, P->n_rule));
   for (int j = last; j >= 1; j--) {
     if (!((double)j * h < X[1].lo))
       continue;
