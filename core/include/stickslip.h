@@ -459,15 +459,16 @@ typedef struct ss_sim_opts {
    * and the polyline splits by mode there).  A stick's straight x2 and x2'
    * cost its two ends.
    *
-   * The bound, in the scaled coordinates: on a step h from local time u the
-   * curve differs from the chord (at the same time) by at most
-   * h^2/8 max|c''|, and max|c''| <= max_j |c''(u + j h/4)| + (h/8)|b3|,
-   * b3 = sum_k R_k w_k^3 from the closed form's terms (amplitude R_k,
-   * frequency w_k); where the curve moves forward along the chord all the
-   * way (the same kind of bound on c'), only the part of c'' across the
-   * chord counts.  The distance to the polyline is at most either, so the
-   * smaller must be <= sample_tolerance (up to rounding, about 1e-15 of the
-   * coordinates).
+   * The bound, in the scaled coordinates: on a step h from local time u,
+   * at t_j = u + j h/4 (j = 0..4), the curve minus its chord at the same
+   * time, f, is at most max_j |f(t_j)| + (h/4)^2/8 max|c''|, and
+   * max|c''| <= max_j |c''(t_j)| + (h/8)|b3|, b3 = sum_k R_k w_k^3 from
+   * the closed form's terms (amplitude R_k, frequency w_k); where the curve
+   * moves forward along the chord all the way (the same kind of bound on
+   * c'), the same holds for the part of c - c(u) across the chord with the
+   * part of c'' across it.  The distance to the polyline is at most either,
+   * so the smaller must be <= sample_tolerance (up to rounding, about 1e-15
+   * of the coordinates).  Each step is about the longest that allows.
    * The count is limited by max_samples (SS_ELIMIT_SAMPLES beyond it).
    */
   double sample_tolerance;

@@ -17,6 +17,7 @@
 #include <time.h>
 
 #include "internal.h"
+#include "sincos.h"
 
 double ss__now(void) {
   struct timespec ts;
@@ -366,66 +367,109 @@ static int push_sample(sampler *sp, const ss_sim *s, double t) {
   return SS_OK;
 }
 
+/* The points at which chord_bound evaluates a step, its ends included. */
+#define CHORD_POINTS 5
+
 /* The bound of ss_sim_opts.sample_tolerance on the chord over local times
  * [u, u + h] of the coordinates g (b3: their third-derivative bounds), in
- * scaled coordinates c, from c', c'' at the five points u + j h/4 (every
- * time of the step is within h/8 of one, so max|c''| <= max_j |c''_j| +
- * (h/8)|b3|, and likewise for c' with max|c''|):
- * - at equal times: |c(t) - chord(t)| <= h^2/8 max|c''|;
+ * scaled coordinates c, from c, c', c'' at the points t_j = u + j d,
+ * d = h / (CHORD_POINTS - 1).  Every time of the step is within d/2 of
+ * one, so max|c''| <= max_j |c''_j| + (d/2)|b3|, and likewise for c' with
+ * max|c''|.  For a function f vanishing at both ends of the step, on
+ * [t_j, t_j+1] f differs from the segment between f_j and f_j+1 by at most
+ * d^2/8 max|f''|, and that segment's norm is at most max(|f_j|, |f_j+1|):
+ * - at equal times, f = c - chord: |f| <= max_j |f_j| + d^2/8 max|c''|;
  * - across: when the projection of c(t) on the chord's direction e moves
- *   forward all along (min_j c'_j.e - (h/8) max|c''| > 0), c(t) stays over
+ *   forward all along (min_j c'_j.e - (d/2) max|c''| > 0), c(t) stays over
  *   the segment and its distance to it is that of f = P(c - c(u)), P the
- *   projection across e: f vanishes at both ends, so
- *   |f| <= h^2/8 max|P c''| <= h^2/8 (max_j |P c''_j| + (h/8)|b3|).
- * The smaller of the two holds. */
+ *   projection across e: |f| <= max_j |f_j| + d^2/8 (max_j |P c''_j| +
+ *   (d/2)|b3|).
+ * The smaller of the two holds.  The first terms are the curve's own
+ * distances at the points, so the bound is close to the true distance. */
 static double chord_bound(const sampler *sp, const ss_trig g[4],
                           const double b3[4], double u, double h) {
-  double c[5][4], v[5][4], a[5][4], B = 0, L = 0;
+  enum { K = CHORD_POINTS };
+  double c[K][4], v[K][4], a[K][4], B = 0, L = 0, dt = h / (K - 1);
+  for (int j = 0; j < K; j++) {
+    /* the coordinates share their modes' frequencies: one sincos each */
+    double t = j == K - 1 ? u + h : u + j * dt, wq[4 * SS_TRIG_MAX],
+           sq[4 * SS_TRIG_MAX], cq[4 * SS_TRIG_MAX];
+    int nq = 0;
+    for (int i = 0; i < 4; i++) {
+      double s = sp->inv_scale[i], d0 = 0, d1 = 0, d2 = 0;
+      if (s != 0) {
+        d0 = g[i].c0 + g[i].c1 * t;
+        d1 = g[i].c1;
+        for (int k = 0; k < g[i].n; k++) {
+          double w = g[i].w[k];
+          int q = 0;
+          while (q < nq && wq[q] != w)
+            q++;
+          if (q == nq) {
+            ss__sincos(w * t, &sq[q], &cq[q]);
+            wq[nq++] = w;
+          }
+          double A = g[i].a[k] * cq[q] + g[i].b[k] * sq[q];
+          double Bk = g[i].b[k] * cq[q] - g[i].a[k] * sq[q];
+          d0 += A;
+          d1 += w * Bk;
+          d2 -= w * w * A;
+        }
+      }
+      c[j][i] = s * d0;
+      v[j][i] = s * d1;
+      a[j][i] = s * d2;
+    }
+  }
   for (int i = 0; i < 4; i++) {
     double s = sp->inv_scale[i];
-    for (int j = 0; j < 5; j++) {
-      double d[3] = {0, 0, 0};
-      if (s != 0)
-        ss_trig_eval(&g[i], u + 0.25 * j * h, 2, d);
-      c[j][i] = s * d[0];
-      v[j][i] = s * d[1];
-      a[j][i] = s * d[2];
-    }
     B += (s * b3[i]) * (s * b3[i]);
-    L += (c[4][i] - c[0][i]) * (c[4][i] - c[0][i]);
+    L += (c[K - 1][i] - c[0][i]) * (c[K - 1][i] - c[0][i]);
   }
-  B = 0.125 * h * sqrt(B);
-  double amax = 0;
-  for (int j = 0; j < 5; j++) {
-    double n2 = 0;
-    for (int i = 0; i < 4; i++)
+  B = 0.5 * dt * sqrt(B);
+  double amax = 0, fmax_t = 0;
+  for (int j = 0; j < K; j++) {
+    double n2 = 0, f2 = 0, w = (double)j / (K - 1);
+    for (int i = 0; i < 4; i++) {
+      double f = c[j][i] - c[0][i] - w * (c[K - 1][i] - c[0][i]);
       n2 += a[j][i] * a[j][i];
+      f2 += f * f;
+    }
     amax = fmax(amax, sqrt(n2));
+    fmax_t = fmax(fmax_t, sqrt(f2));
   }
   amax += B;
-  double best = 0.125 * h * h * amax;
+  double best = fmax_t + 0.125 * dt * dt * amax;
   if (L > 0) {
     L = sqrt(L);
-    double vmin = INFINITY, across = 0;
-    for (int j = 0; j < 5; j++) {
-      double ve = 0, ae = 0, n2 = 0;
+    double e[4], vmin = INFINITY, across = 0, fmax_p = 0;
+    for (int i = 0; i < 4; i++)
+      e[i] = (c[K - 1][i] - c[0][i]) / L;
+    for (int j = 0; j < K; j++) {
+      double ve = 0, ae = 0, n2 = 0, fe = 0, f2 = 0;
       for (int i = 0; i < 4; i++) {
-        double e = (c[4][i] - c[0][i]) / L;
-        ve += v[j][i] * e;
-        ae += a[j][i] * e;
+        double f = c[j][i] - c[0][i];
+        ve += v[j][i] * e[i];
+        ae += a[j][i] * e[i];
         n2 += a[j][i] * a[j][i];
+        fe += f * e[i];
+        f2 += f * f;
       }
       vmin = fmin(vmin, ve);
       across = fmax(across, sqrt(fmax(0, n2 - ae * ae)));
+      fmax_p = fmax(fmax_p, sqrt(fmax(0, f2 - fe * fe)));
     }
-    if (vmin - 0.125 * h * amax > 0)
-      best = fmin(best, 0.125 * h * h * (across + B));
+    if (vmin - 0.5 * dt * amax > 0)
+      best = fmin(best, fmax_p + 0.125 * dt * dt * (across + B));
   }
   return best;
 }
 
 /* The samples of the current phase of s over absolute times [a, b] (within
- * the phase): a, the points the tolerance needs, and b. */
+ * the phase): a, the points the tolerance needs, and b.  Each step is the
+ * longest the bound allows, to a few per cent: as the distance grows as
+ * h^2, one evaluation mostly predicts it; otherwise it is bracketed
+ * between the longest step that held and the shortest that did not. */
 static void sample_phase(sampler *sp, const ss_sim *s, double a, double b) {
   if (b < a || push_sample(sp, s, a))
     return;
@@ -444,22 +488,40 @@ static void sample_phase(sampler *sp, const ss_sim *s, double a, double b) {
   /* below this a step is at the rounding level of the times themselves */
   double h_min = 8 * DBL_EPSILON * fmax(1.0, fmax(fabs(ub), fabs(s->t_hi)));
   while (ub - u > h_min) {
-    if (h > ub - u)
-      h = ub - u;
-    double E = chord_bound(sp, g, b3, u, h);
-    while (E > eps && h > h_min) {
-      double f = 0.9 * sqrt(eps / E);
-      h *= f < 0.1 ? 0.1 : f > 0.9 ? 0.9 : f;
-      E = chord_bound(sp, g, b3, u, h);
+    /* lo: the longest step known to hold; hi: the shortest known not to */
+    double rem = ub - u, lo = 0, hi = INFINITY;
+    h = fmin(h, rem);
+    for (int k = 0;; k++) {
+      double E = chord_bound(sp, g, b3, u, h);
+      if (isnan(E)) {
+        lo = h; /* no bound (a state out of range): the step as it is */
+        break;
+      }
+      if (E <= eps)
+        lo = h;
+      else
+        hi = h;
+      if (lo == rem || (lo > 0 && (lo >= 0.95 * hi || k >= 8)))
+        break;
+      if (lo == 0 && h <= h_min) {
+        lo = h; /* at the rounding level of the times: taken as it is */
+        break;
+      }
+      /* the chord's distance grows as h^2: the step that meets eps */
+      double f = E > 0 ? 0.98 * sqrt(eps / E) : 4;
+      double t = h * (f < 0.1 ? 0.1 : f > 4 ? 4 : f);
+      if (lo > 0 && t < 1.02 * lo && hi == INFINITY)
+        break; /* the longest step, as far as the bound tells */
+      if (t <= lo || t >= hi)
+        t = hi == INFINITY ? 2 * lo : 0.5 * (lo + hi);
+      h = fmin(t, rem);
     }
+    h = lo;
     u += h;
     if (ub - u <= h_min)
       break;
     if (push_sample(sp, s, s->t_hi + (s->t_lo + u)))
       return;
-    /* the next step as this one's error predicts, at most doubled */
-    double f = E > 0 ? 0.9 * sqrt(eps / E) : 2;
-    h *= f > 2 ? 2 : f < 1 ? 1 : f;
   }
   push_sample(sp, s, b);
 }
