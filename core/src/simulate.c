@@ -448,16 +448,20 @@ static double chord_bound(const sampler *sp, const ss_trig g[4],
     for (int j = 0; j < K; j++) {
       double ve = 0, ae = 0, n2 = 0, fe = 0, f2 = 0;
       for (int i = 0; i < 4; i++) {
-        double f = c[j][i] - c[0][i];
         ve += v[j][i] * e[i];
         ae += a[j][i] * e[i];
-        n2 += a[j][i] * a[j][i];
-        fe += f * e[i];
+        fe += (c[j][i] - c[0][i]) * e[i];
+      }
+      /* the parts across e as vectors, not as differences of squares
+       * (|f|^2 - (f.e)^2 loses a small part across a long chord) */
+      for (int i = 0; i < 4; i++) {
+        double f = c[j][i] - c[0][i] - fe * e[i], q = a[j][i] - ae * e[i];
         f2 += f * f;
+        n2 += q * q;
       }
       vmin = fmin(vmin, ve);
-      across = fmax(across, sqrt(fmax(0, n2 - ae * ae)));
-      fmax_p = fmax(fmax_p, sqrt(fmax(0, f2 - fe * fe)));
+      across = fmax(across, sqrt(n2));
+      fmax_p = fmax(fmax_p, sqrt(f2));
     }
     if (vmin - 0.5 * dt * amax > 0)
       best = fmin(best, fmax_p + 0.125 * dt * dt * (across + B));

@@ -394,6 +394,23 @@ static void test_random(void) {
   ASSERT_TRUE(orbits >= 8);
 }
 
+/* EVIDENCE: README "Samples placed for a curve": a curve nearly straight
+ * in its scaled coordinates (a stick with a small ripple, x1 and x2 scaled
+ * up 300 and 8000 times): the part across a long chord is small against
+ * the chord and must not be lost to rounding (it was, as |f|^2 - (f.e)^2,
+ * and the polyline missed the curve by 13.8 times eps). */
+static void test_straight(void) {
+  ss_params p = {0.3297988943736313, 0.79922832841287161, 0.17527159304885123,
+                 0.82124920468136198, 1};
+  double x0[4] = {-0.75817458155770356, -2.2988997066001438,
+                  0.32979911479541635, 1};
+  ss_model m;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  metric mt = {1 | 2, {0.0029893984450986891, 0.0001268481247761, 0, 0}};
+  check_curve(&m, x0, 2.3699399726452652, &mt, 2.0232206634829993e-07, 0,
+              "stick with a ripple");
+}
+
 /* EVIDENCE: README "Samples placed for a curve": the count is bounded by
  * max_samples (SS_ELIMIT_SAMPLES, the samples so far kept), and a bad
  * tolerance, scale or axis set, or a tolerance with even samples, is
@@ -439,6 +456,7 @@ static void test_limits(void) {
 int main(void) {
   test_paper();
   test_random();
+  test_straight();
   test_limits();
   TEST_DONE();
 }
