@@ -411,6 +411,73 @@ static void test_straight(void) {
               "stick with a ripple");
 }
 
+/* EVIDENCE: README "Samples placed for a curve": random runs from random
+ * states (half of them starting in a stick with a small ripple), random
+ * tolerances 1e-1 to 1e-7, random axes and scales 1e-4 to 1e4: every one within
+ * eps, every event a vertex. */
+static void test_random_runs(void) {
+  unsigned long long seed = 20261125;
+  int runs = 0;
+  for (int k = 0; k < 60; k++) {
+    ss_params p = {uniform(&seed, 0.05, 0.95), uniform(&seed, 0.2, 20),
+                   uniform(&seed, 0.02, 0.2), 0, 1};
+    p.ur = p.us * uniform(&seed, 1.5, 15);
+    ss_model m;
+    if (ss_model_init(&m, &p, NULL) != SS_OK)
+      continue;
+    double x0[4], L = p.ur / p.chi;
+    x0[0] = uniform(&seed, -3, 3) * L;
+    if (k % 2 == 0) {
+      /* a stick (the force chi (x2 - x1) inside (-ur, ur)) near the
+       * stick's own rest (x1 = chi x2, x1' = chi V): a long stick with a
+       * small ripple, nearly straight */
+      double ripple = exp(uniform(&seed, log(1e-12), log(1e-2)));
+      x0[1] = -0.95 * L / (1 - p.chi) * uniform(&seed, 0.5, 1);
+      x0[0] = p.chi * x0[1] + ripple * (k % 4 ? 1 : -1);
+      x0[2] = p.chi * p.V + ripple * uniform(&seed, -1, 1);
+      x0[3] = p.V;
+    } else {
+      x0[1] = uniform(&seed, -3, 3) * L;
+      x0[2] = uniform(&seed, -2, 2);
+      x0[3] = uniform(&seed, -2, 2);
+    }
+    metric mt = {0, {1, 1, 1, 1}};
+    mt.axes = (unsigned)(uniform(&seed, 0, 16)) & 15u;
+    for (int i = 0; i < 4; i++)
+      mt.scale[i] = exp(uniform(&seed, log(1e-4), log(1e4)));
+    double eps = exp(uniform(&seed, log(1e-7), log(1e-1)));
+    if (k % 2 == 0) {
+      /* the stick nearly straight where it counts: x1 or x2 measured at a
+       * fine scale (its travel long against the ripple), eps small */
+      int i = k % 4 ? 1 : 0;
+      mt.axes |= 1u << i;
+      mt.scale[i] = exp(uniform(&seed, log(1e-4), log(1e-3)));
+      eps = exp(uniform(&seed, log(1e-7), log(1e-5)));
+    }
+    double t_end = exp(uniform(&seed, 0, log(60)));
+    /* at most a few hundred thousand samples */
+    ss_sim_opts o;
+    memset(&o, 0, sizeof o);
+    o.t_end = o.sample_to = t_end;
+    o.sample_tolerance = eps;
+    o.sample_axes = mt.axes;
+    memcpy(o.sample_scale, mt.scale, sizeof o.sample_scale);
+    o.max_samples = 200000;
+    ss_sim_result r;
+    int rc = ss_simulate(&m, x0, &o, &r, NULL);
+    ss_sim_result_free(&r);
+    if (rc == SS_ELIMIT_SAMPLES)
+      continue;
+    ASSERT_EQ_INT(rc, SS_OK);
+    char what[64];
+    snprintf(what, sizeof what, "random run %d", k);
+    check_curve(&m, x0, t_end, &mt, eps, 0, what);
+    runs++;
+  }
+  printf("random runs checked: %d\n", runs);
+  ASSERT_TRUE(runs >= 40);
+}
+
 /* EVIDENCE: README "Samples placed for a curve": the count is bounded by
  * max_samples (SS_ELIMIT_SAMPLES, the samples so far kept), and a bad
  * tolerance, scale or axis set, or a tolerance with even samples, is
@@ -457,6 +524,7 @@ int main(void) {
   test_paper();
   test_random();
   test_straight();
+  test_random_runs();
   test_limits();
   TEST_DONE();
 }
