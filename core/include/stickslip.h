@@ -467,8 +467,11 @@ typedef struct ss_sim_opts {
    * moves forward along the chord all the way (the same kind of bound on
    * c'), the same holds for the part of c - c(u) across the chord with the
    * part of c'' across it.  The distance to the polyline is at most either,
-   * so the smaller must be <= sample_tolerance (up to rounding, about 1e-15
-   * of the coordinates).  Each step is about the longest that allows.
+   * so the smaller must be <= sample_tolerance (up to rounding: about 1e-15
+   * of the coordinates, and the curve's speed times the rounding of the
+   * samples' absolute times).  Each step is about the longest that allows.
+   * A tolerance near the coordinates' rounding needs steps near the times'
+   * rounding: set max_samples (the API always does).
    * The count is limited by max_samples (SS_ELIMIT_SAMPLES beyond it).
    */
   double sample_tolerance;
