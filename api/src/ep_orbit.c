@@ -187,7 +187,10 @@ static int sample_paths(orbit_x *x, const api_call *c) {
 int ep_orbit_run(void *xp, const api_call *c) {
   orbit_x *x = xp;
   const api_limits *lim = c->lim;
-  int max_out = lim->max_orbits > 0 ? lim->max_orbits : 1;
+  /* a guess gives one orbit at most: room for one, not for max_orbits */
+  int max_out = x->opts.n_guess > 0   ? 1
+                : lim->max_orbits > 0 ? lim->max_orbits
+                                      : 1;
   ss_diag d;
   if (!(x->orbits = calloc((size_t)max_out, sizeof *x->orbits)))
     return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
