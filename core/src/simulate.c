@@ -505,7 +505,7 @@ static void sample_phase(sampler *sp, const ss_sim *s, double a, double b) {
         lo = h;
       else
         hi = h;
-      if (lo == rem || (lo > 0 && (lo >= 0.95 * hi || k >= 8)))
+      if (lo == rem || (lo > 0 && (lo >= 0.9 * hi || k >= 8)))
         break;
       if (lo == 0 && h <= h_min) {
         lo = h; /* at the rounding level of the times: taken as it is */
