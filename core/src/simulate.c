@@ -471,7 +471,7 @@ static double chord_bound(const sampler *sp, const ss_trig g[4],
 
 /* The samples of the current phase of s over absolute times [a, b] (within
  * the phase): a, the points the tolerance needs, and b.  Each step is the
- * longest the bound allows, to a few per cent: as the distance grows as
+ * longest the bound allows, to about 10 %: as the distance grows as
  * h^2, one evaluation mostly predicts it; otherwise it is bracketed
  * between the longest step that held and the shortest that did not. */
 static void sample_phase(sampler *sp, const ss_sim *s, double a, double b) {
