@@ -472,16 +472,23 @@ static int job_cancelled(void *cls) {
   return atomic_load(&((srv_job *)cls)->cancel);
 }
 
-/* One request to the api, with what the daemon knows of itself. */
-static void handle(struct srv_daemon *d, req *r, api_response *ar) {
+/* What the daemon tells the api about itself while it runs @a job (whose
+ * cancel flag the computation polls). */
+static api_server_info server_info(struct srv_daemon *d, srv_job *job) {
   api_server_info info = {now() - d->started,
                           srv_metrics_in_flight(d->metrics, 0),
                           d->transport,
                           metrics_text,
                           d,
                           job_cancelled,
-                          &r->job,
+                          job,
                           d->cfg.stream_above};
+  return info;
+}
+
+/* One request to the api, with what the daemon knows of itself. */
+static void handle(struct srv_daemon *d, req *r, api_response *ar) {
+  api_server_info info = server_info(d, &r->job);
   api_handle(r->ep, r->buf ? r->buf : "", r->len, &d->cfg.lim, &info, ar);
   if (ar->status >= 500 && ar->status != 503)
     fprintf(stderr, "stickslipd: %s %s answered %d: %.200s\n", r->method,
@@ -569,17 +576,9 @@ static void job_done(srv_job *j) {
 static const srv_job_ops REQUEST_JOB = {job_queued, job_run, job_done,
                                         job_gone};
 
-/* The body is in: queue the computation, or refuse it at once. */
+/* Queue the computation, or refuse it at once. */
 static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
                               req *r) {
-  if (atomic_load(&d->draining))
-    return send_problem(c, r, API_P_SHUTTING_DOWN,
-                        "the server is shutting down", NULL, 0, NULL);
-  if (r->over_budget || over_budget(d)) {
-    api_response ar;
-    budget_problem(d, &ar);
-    return send_api(c, r, &ar, NULL);
-  }
   r->job.ops = &REQUEST_JOB;
   int rc = srv_pool_submit(d->pool, &r->job, r->key);
   if (rc == 0)
@@ -693,14 +692,7 @@ static void item_run(srv_job *j) {
   if (over_budget(d)) {
     budget_problem(d, &it->ar);
   } else {
-    api_server_info info = {now() - d->started,
-                            srv_metrics_in_flight(d->metrics, 0),
-                            d->transport,
-                            metrics_text,
-                            d,
-                            job_cancelled,
-                            &it->job,
-                            d->cfg.stream_above};
+    api_server_info info = server_info(d, &it->job);
     api_batch_run(b->ab, it->i, &d->cfg.lim, &info, &it->ar);
   }
   pthread_mutex_lock(&b->mu);
@@ -943,17 +935,10 @@ static void batch_detach(batch *b) {
   pthread_mutex_unlock(&b->mu);
 }
 
-/* The body of a POST /batch is in: check it, and start the answer. */
+/* The body of a POST /batch is in (and the daemon takes computations): check
+ * it, and start the answer. */
 static enum MHD_Result batch_start(struct srv_daemon *d,
                                    struct MHD_Connection *c, req *r) {
-  if (atomic_load(&d->draining))
-    return send_problem(c, r, API_P_SHUTTING_DOWN,
-                        "the server is shutting down", NULL, 0, NULL);
-  if (r->over_budget || over_budget(d)) {
-    api_response ar;
-    budget_problem(d, &ar);
-    return send_api(c, r, &ar, NULL);
-  }
   api_response ar;
   api_batch *ab;
   if (api_batch_open(r->buf, r->len, &d->cfg.lim, &ab, &ar) != 0)
@@ -1233,6 +1218,24 @@ static void received(struct srv_daemon *d, req *r) {
   pthread_mutex_unlock(&d->mu);
 }
 
+/* The body of a computation is in: refused at once while the daemon shuts
+ * down or the memory budget is spent; else a batch starts its answer, and
+ * any other request goes to the pool. */
+static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
+                               req *r) {
+  if (atomic_load(&d->draining))
+    return send_problem(c, r, API_P_SHUTTING_DOWN,
+                        "the server is shutting down", NULL, 0, NULL);
+  if (r->over_budget || over_budget(d)) {
+    api_response ar;
+    budget_problem(d, &ar);
+    return send_api(c, r, &ar, NULL);
+  }
+  if (api_endpoint_at(r->ep)->run_class == API_RUN_BATCH)
+    return batch_start(d, c, r);
+  return submit(d, c, r);
+}
+
 static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
                                const char *url, const char *method,
                                const char *version, const char *upload_data,
@@ -1285,9 +1288,7 @@ static enum MHD_Result handler(void *cls, struct MHD_Connection *c,
     handle(d, r, &ar);
     return send_api(c, r, &ar, NULL);
   }
-  if (api_endpoint_at(r->ep)->run_class == API_RUN_BATCH)
-    return batch_start(d, c, r);
-  return submit(d, c, r);
+  return compute(d, c, r);
 }
 
 /* A JSON string's contents (the path is the client's text). */
