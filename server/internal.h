@@ -1,0 +1,177 @@
+/*
+ * internal.h: what the daemon's files share; not installed.
+ *
+ *   daemon.c   start and stop: listening, descriptors, the daemon's info
+ *   request.c  a request: admission, body, the pool's side, completion
+ *   reply.c    answers: headers, CORS, gzip, streams, problems, the budget
+ *   batch.c    POST /batch: items in the pool, lines streamed as done
+ *   monitor.c  connections: tracking, slow clients, peers gone away
+ */
+#ifndef SS_SERVER_INTERNAL_H
+#define SS_SERVER_INTERNAL_H
+
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stddef.h>
+
+#include <microhttpd.h>
+
+#include "server.h"
+
+/* bytes of a streamed answer at a time */
+#define SRV__STREAM_CHUNK (32 * 1024)
+/* gzip at a level that keeps it cheap next to the computation (a
+ * 2000-sample /simulate: level 3 is within 10% of level 6's size at a third
+ * of its time); a streamed answer's deflate state is about 256 KiB, counted
+ * against the memory budget */
+#define SRV__GZIP_LEVEL 3
+#define SRV__GZIP_STATE (256 * 1024)
+
+/* One TCP connection, from NOTIFY_CONNECTION's start to its close. */
+typedef struct srv__conn {
+  struct srv__conn *prev, *next;
+  int fd;
+  double start;  /* of the request being received */
+  int receiving; /* 0 once the current request is wholly received */
+  int shut;      /* the monitor closed it */
+  int peer_port; /* of a TCP peer, else 0 */
+  /* for diagnosis (srv_connection_watched) */
+  atomic_int requests, suspended, resumed;
+  char key[SRV_CLIENT_KEY];
+} srv__conn;
+
+struct srv_daemon {
+  struct MHD_Daemon *mhd;
+  srv_config cfg;
+  int port; /* the port it listens on */
+  srv_metrics *metrics;
+  srv_pool *pool;
+  char transport[48];
+  atomic_int draining;
+  double started;
+  pthread_mutex_t mu; /* the connection list */
+  srv__conn *conns;
+  pthread_t monitor;
+  atomic_int monitor_stop;
+  atomic_ulong conns_started; /* taken up by libmicrohttpd */
+  int monitor_running;
+  /* request ids: a per-start random seed mixed with a counter */
+  unsigned long long rid_seed;
+  atomic_ullong rid_next;
+  char (*etags)[24]; /* per row: a static answer's validator, or "" */
+};
+
+typedef struct srv__batch srv__batch;
+
+typedef struct srv__req {
+  srv_job job; /* first: a job is its request */
+  struct srv_daemon *d;
+  struct MHD_Connection *c;
+  srv__conn *cn;
+  size_t ep; /* endpoint index; api_endpoint_count() until routed */
+  int is_post;
+  int status;
+  int done; /* a response was queued */
+  int close;
+  int answered; /* the pool handed the request back with r->ar */
+  char *buf;
+  size_t len, cap;
+  int too_big;
+  int over_budget; /* the body came while the memory budget was spent */
+  long held;       /* bytes of body and answer counted against the budget */
+  double t0;
+  size_t bytes;                 /* of the answer's body, as sent */
+  char rid[SRV_REQUEST_ID + 1]; /* X-Request-Id, given or made */
+  const char *etag;             /* a validator for a static answer, or NULL */
+  char cors[128];               /* Access-Control-Allow-Origin, or "" */
+  char preflight[24];           /* OPTIONS: the methods the path takes */
+  int gzip;                     /* the client accepts gzip */
+  char method[8];
+  char path[96];
+  char key[SRV_CLIENT_KEY]; /* the client, for the pool's queues */
+  api_response ar;
+  srv__batch *batch; /* a POST /batch being answered */
+  /* An answer decided on the first call, sent on a later one: libmicrohttpd
+   * handles a response queued during the first call of a request far more
+   * slowly (about 200 us each, serialised), so only what must stop a body
+   * (413, and framing that could smuggle a request) is queued that early. */
+  int p_status;
+  api_problem_kind p_kind;
+  const char *p_allow;
+  char p_detail[128];
+} srv__req;
+
+/* ---- daemon.c ------------------------------------------------------------ */
+
+double srv__now(void); /* monotonic seconds */
+
+/* What the daemon tells the api about itself while it runs @a job (whose
+ * cancel flag the computation polls). */
+api_server_info srv__server_info(struct srv_daemon *d, srv_job *job);
+
+/* ---- request.c: libmicrohttpd's callbacks for a request ------------------ */
+
+enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
+                             const char *url, const char *method,
+                             const char *version, const char *upload_data,
+                             size_t *upload_data_size, void **con_cls);
+void srv__completed(void *cls, struct MHD_Connection *c, void **con_cls,
+                    enum MHD_RequestTerminationCode toe);
+
+/* ---- reply.c ------------------------------------------------------------- */
+
+/* Whether Accept-Encoding names gzip with a quality above 0. */
+int srv__accepts_gzip(struct MHD_Connection *c);
+/* The origin of a browser's request into r->cors, when --cors-origin allows
+ * it. */
+void srv__cors_of(const struct srv_daemon *d, struct MHD_Connection *c,
+                  srv__req *r);
+/* The headers every answer carries (X-Request-Id, CORS). */
+void srv__common_headers(const srv__req *r, struct MHD_Response *resp);
+/* Queue @a body (len bytes, malloc'd; the answer owns it), gzipped when the
+ * client takes it; a Retry-After, an Allow and a Connection: close when
+ * asked. */
+enum MHD_Result srv__send_body(struct MHD_Connection *c, srv__req *r,
+                               int status, char *body, size_t len,
+                               const char *ctype, int retry_after,
+                               const char *allow, int close);
+/* Queue an answer of the api (which it takes over), whole or streamed. */
+enum MHD_Result srv__send_api(struct MHD_Connection *c, srv__req *r,
+                              api_response *ar, const char *allow);
+/* Queue a problem of @a kind. */
+enum MHD_Result srv__send_problem(struct MHD_Connection *c, srv__req *r,
+                                  api_problem_kind kind, const char *detail,
+                                  const char *limit, double limit_value,
+                                  const char *allow);
+/* Count @a bytes against the memory budget for request @a r (negative to
+ * give them back). */
+void srv__hold(struct srv_daemon *d, srv__req *r, long bytes);
+/* Whether the memory budget is spent. */
+int srv__over_budget(const struct srv_daemon *d);
+/* The 503 for a spent memory budget, into @a ar. */
+void srv__budget_problem(struct srv_daemon *d, api_response *ar);
+
+/* ---- batch.c ------------------------------------------------------------- */
+
+/* The body of a POST /batch is in: check it, and start the answer. */
+enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
+                                 srv__req *r);
+/* The request of a batch has completed: what is still in the pool stops.
+ * Returns the bytes of the answer written. */
+size_t srv__batch_detach(srv__batch *b);
+
+/* ---- monitor.c ----------------------------------------------------------- */
+
+/* libmicrohttpd's NOTIFY_CONNECTION: a connection's start and close. */
+void srv__connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
+                     enum MHD_ConnectionNotificationCode toe);
+/* The monitor thread (started by srv_start, stopped by monitor_stop). */
+void *srv__monitor(void *arg);
+/* Whether the peer of socket @a fd has closed its end. */
+int srv__peer_closed(int fd);
+/* A connection's deadline for a request: @a receiving 1 starts it now (the
+ * next request on @a cn), 0 stops it (the request is wholly received);
+ * @a cn may be NULL. */
+void srv__receiving(struct srv_daemon *d, srv__conn *cn, int receiving);
+
+#endif

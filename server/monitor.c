@@ -1,0 +1,164 @@
+/*
+ * monitor.c: the connections, and the watch over them.
+ *
+ * Each TCP connection is on a list from its start to its close, with the
+ * time its current request started.  While a connection is suspended
+ * libmicrohttpd does not look at its socket, so a monitor thread does,
+ * every MONITOR_MS: a peer that has closed its end has its waiting work
+ * dropped and its running work flagged (the core polls the flag).  The
+ * monitor also closes connections that do not deliver a whole request
+ * (headers and body) within request_timeout of their start or of the end
+ * of their previous request: libmicrohttpd's own timeout counts idle time
+ * only, which a byte every few seconds resets.
+ */
+#define _GNU_SOURCE
+#include <arpa/inet.h>
+#include <errno.h>
+#include <netinet/in.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <sys/socket.h>
+#include <time.h>
+
+#include "internal.h"
+
+#define MONITOR_MS 20
+
+/* ---- the connections ----------------------------------------------------- */
+
+static void client_key(struct MHD_Connection *c, char *key, size_t n) {
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+  const struct sockaddr *sa = ci ? ci->client_addr : NULL;
+  snprintf(key, n, "?");
+  if (sa && sa->sa_family == AF_INET)
+    inet_ntop(AF_INET, &((const struct sockaddr_in *)sa)->sin_addr, key,
+              (socklen_t)n);
+  else if (sa && sa->sa_family == AF_INET6)
+    inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)sa)->sin6_addr, key,
+              (socklen_t)n);
+}
+
+static int peer_port(struct MHD_Connection *c) {
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+  const struct sockaddr *sa = ci ? ci->client_addr : NULL;
+  if (sa && sa->sa_family == AF_INET)
+    return ntohs(((const struct sockaddr_in *)sa)->sin_port);
+  if (sa && sa->sa_family == AF_INET6)
+    return ntohs(((const struct sockaddr_in6 *)sa)->sin6_port);
+  return 0;
+}
+
+/* libmicrohttpd's NOTIFY_CONNECTION: a connection joins the list at its
+ * start, and leaves it at its close. */
+void srv__connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
+                     enum MHD_ConnectionNotificationCode toe) {
+  struct srv_daemon *d = cls;
+  srv__conn *cn = *socket_ctx;
+  if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
+    atomic_fetch_add(&d->conns_started, 1);
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(c, MHD_CONNECTION_INFO_CONNECTION_FD);
+    if (!ci || !(cn = calloc(1, sizeof *cn)))
+      return;
+    cn->fd = ci->connect_fd;
+    cn->start = srv__now();
+    cn->receiving = 1;
+    client_key(c, cn->key, sizeof cn->key);
+    cn->peer_port = peer_port(c);
+    pthread_mutex_lock(&d->mu);
+    cn->next = d->conns;
+    if (d->conns)
+      d->conns->prev = cn;
+    d->conns = cn;
+    pthread_mutex_unlock(&d->mu);
+    *socket_ctx = cn;
+    return;
+  }
+  if (!cn)
+    return;
+  pthread_mutex_lock(&d->mu);
+  if (cn->prev)
+    cn->prev->next = cn->next;
+  else
+    d->conns = cn->next;
+  if (cn->next)
+    cn->next->prev = cn->prev;
+  pthread_mutex_unlock(&d->mu);
+  free(cn);
+  *socket_ctx = NULL;
+}
+
+void srv__receiving(struct srv_daemon *d, srv__conn *cn, int receiving) {
+  if (!cn)
+    return;
+  pthread_mutex_lock(&d->mu);
+  if (receiving)
+    cn->start = srv__now();
+  cn->receiving = receiving;
+  pthread_mutex_unlock(&d->mu);
+}
+
+/* ---- the monitor --------------------------------------------------------- */
+
+/* Whether the peer of socket @a fd has closed its end: a read that finds
+ * the end of the stream (or a reset) says so; pending bytes (a pipelined
+ * request) or nothing to read say it is still there. */
+int srv__peer_closed(int fd) {
+  char b;
+  if (fd < 0)
+    return 0;
+  ssize_t k = recv(fd, &b, 1, MSG_PEEK | MSG_DONTWAIT);
+  return k == 0 ||
+         (k < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
+}
+
+/* Close the connections that are past their deadline for a request. */
+static void reap_slow(struct srv_daemon *d) {
+  double t = srv__now();
+  pthread_mutex_lock(&d->mu);
+  for (srv__conn *cn = d->conns; cn; cn = cn->next)
+    if (cn->receiving && !cn->shut && t - cn->start > d->cfg.request_timeout) {
+      shutdown(cn->fd, SHUT_RDWR);
+      cn->shut = 1;
+      srv_metrics_slow(d->metrics);
+    }
+  pthread_mutex_unlock(&d->mu);
+}
+
+void *srv__monitor(void *arg) {
+  struct srv_daemon *d = arg;
+  struct timespec ts = {0, MONITOR_MS * 1000000L};
+  while (!atomic_load(&d->monitor_stop)) {
+    srv_pool_watch(d->pool);
+    reap_slow(d);
+    nanosleep(&ts, NULL);
+  }
+  return NULL;
+}
+
+/* ---- diagnosis ----------------------------------------------------------- */
+
+unsigned long srv_connections_started(struct srv_daemon *d) {
+  return atomic_load(&d->conns_started);
+}
+
+int srv_connection_watched(struct srv_daemon *d, int fd, int peer_port,
+                           srv_conn_state *st) {
+  int found = -1;
+  pthread_mutex_lock(&d->mu);
+  for (srv__conn *cn = d->conns; cn && found; cn = cn->next)
+    if (fd >= 0 ? cn->fd == fd : cn->peer_port == peer_port) {
+      st->receiving = cn->receiving;
+      st->shut = cn->shut;
+      st->age = srv__now() - cn->start;
+      st->requests = atomic_load(&cn->requests);
+      st->suspended = atomic_load(&cn->suspended);
+      st->resumed = atomic_load(&cn->resumed);
+      found = 0;
+    }
+  pthread_mutex_unlock(&d->mu);
+  return found;
+}

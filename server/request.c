@@ -1,0 +1,491 @@
+/*
+ * request.c: a request, from its headers to its completion.
+ *
+ * Admission.  The first call of libmicrohttpd's handler has the headers:
+ * the request gets its id (X-Request-Id, given or made), its client (the
+ * peer, or X-Forwarded-For from a trusted proxy), its route, and what can
+ * be refused from the headers alone is decided then.  Framing that could
+ * smuggle a request (two Content-Length headers, Content-Length with
+ * Transfer-Encoding, two Host headers) is refused with 400 and the
+ * connection is closed.
+ *
+ * Compute.  A request that computes is suspended once its body is in
+ * (MHD_suspend_connection), handed to the pool (pool.c: per-client queues,
+ * round robin, a bounded queue per client, at most client_workers running
+ * per client), and resumed with its answer by the worker that computed it.
+ * What needs no computing (the api's inline endpoints, and every refusal)
+ * is answered on the I/O thread at once.  POST /batch is batch.c's.
+ *
+ * Completion.  Metrics, one line of access log, and the connection's
+ * deadline for its next request.
+ */
+#define _GNU_SOURCE
+#include <arpa/inet.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <time.h>
+
+#include "internal.h"
+
+/* ---- admission: what the headers say ------------------------------------- */
+
+int srv_address_text(const char *s, char *out, size_t n) {
+  unsigned char ip[16];
+  int af = inet_pton(AF_INET, s, ip) == 1    ? AF_INET
+           : inet_pton(AF_INET6, s, ip) == 1 ? AF_INET6
+                                             : 0;
+  return af && inet_ntop(af, ip, out, (socklen_t)n) ? 0 : -1;
+}
+
+/* The client of a request: the peer's address, or, when the peer is a
+ * trusted proxy, the first address of X-Forwarded-For (the one the first
+ * proxy saw), if it is an address. */
+static void client_of(const struct srv_daemon *d, struct MHD_Connection *c,
+                      srv__req *r) {
+  const char *peer = r->cn ? r->cn->key : "?";
+  snprintf(r->key, sizeof r->key, "%s", peer);
+  int trusted = 0;
+  for (int i = 0; i < d->cfg.n_trusted && !trusted; i++)
+    trusted = strcmp(peer, d->cfg.trusted[i]) == 0;
+  const char *xff = trusted ? MHD_lookup_connection_value(c, MHD_HEADER_KIND,
+                                                          "X-Forwarded-For")
+                            : NULL;
+  if (!xff)
+    return;
+  char first[SRV_CLIENT_KEY];
+  xff += strspn(xff, " \t");
+  size_t n = strcspn(xff, ", \t");
+  if (n == 0 || n >= sizeof first)
+    return;
+  memcpy(first, xff, n);
+  first[n] = 0;
+  srv_address_text(first, r->key, sizeof r->key); /* the peer if not */
+}
+
+static int is_json_type(const char *ct) {
+  if (!ct)
+    return 0;
+  while (*ct == ' ')
+    ct++;
+  size_t n = strlen("application/json");
+  return strncasecmp(ct, "application/json", n) == 0 &&
+         (ct[n] == 0 || ct[n] == ';' || ct[n] == ' ');
+}
+
+typedef struct framing {
+  int content_length, transfer_encoding, host;
+} framing;
+
+static enum MHD_Result count_header(void *cls, enum MHD_ValueKind kind,
+                                    const char *key, const char *value) {
+  framing *f = cls;
+  (void)kind;
+  (void)value;
+  f->content_length += strcasecmp(key, "Content-Length") == 0;
+  f->transfer_encoding += strcasecmp(key, "Transfer-Encoding") == 0;
+  f->host += strcasecmp(key, "Host") == 0;
+  return MHD_YES;
+}
+
+/* Headers that would let two parties read different requests out of the
+ * same bytes; NULL when there are none. */
+static const char *smuggling(struct MHD_Connection *c) {
+  framing f = {0, 0, 0};
+  MHD_get_connection_values(c, MHD_HEADER_KIND, count_header, &f);
+  if (f.content_length > 1)
+    return "more than one Content-Length header";
+  if (f.content_length && f.transfer_encoding)
+    return "Content-Length together with Transfer-Encoding";
+  if (f.host > 1)
+    return "more than one Host header";
+  return NULL;
+}
+
+/* Decide an error answer now, send it on the next call. */
+static enum MHD_Result defer(srv__req *r, api_problem_kind kind,
+                             const char *detail, const char *allow) {
+  r->p_status = api_problem_status(kind);
+  r->p_kind = kind;
+  r->p_allow = allow;
+  if (detail)
+    snprintf(r->p_detail, sizeof r->p_detail, "%s", detail);
+  return MHD_YES;
+}
+
+/* 413: the body is over the limit (from Content-Length, or as it came). */
+static enum MHD_Result too_large(struct srv_daemon *d, struct MHD_Connection *c,
+                                 srv__req *r) {
+  char detail[128];
+  snprintf(detail, sizeof detail, "the body is over the limit of %zu bytes",
+           d->cfg.lim.max_body);
+  return srv__send_problem(c, r, API_P_BODY_TOO_LARGE, detail, "max_body",
+                           (double)d->cfg.lim.max_body, NULL);
+}
+
+/* The request's id: its X-Request-Id when that is 1 to SRV_REQUEST_ID
+ * characters of [A-Za-z0-9._:-] (what a proxy or a client makes), else one
+ * made here, 16 hex digits unique within the process's life. */
+static void request_id(struct srv_daemon *d, struct MHD_Connection *c,
+                       srv__req *r) {
+  const char *h =
+      MHD_lookup_connection_value(c, MHD_HEADER_KIND, "X-Request-Id");
+  size_t n = h ? strlen(h) : 0;
+  int ok = n >= 1 && n <= SRV_REQUEST_ID;
+  for (size_t i = 0; ok && i < n; i++) {
+    char ch = h[i];
+    ok = (ch >= 'A' && ch <= 'Z') || (ch >= 'a' && ch <= 'z') ||
+         (ch >= '0' && ch <= '9') || ch == '.' || ch == '_' || ch == ':' ||
+         ch == '-';
+  }
+  if (ok) {
+    memcpy(r->rid, h, n + 1);
+    return;
+  }
+  /* splitmix64 of seed + counter: distinct for distinct counters */
+  unsigned long long z =
+      d->rid_seed +
+      0x9e3779b97f4a7c15ULL * (atomic_fetch_add(&d->rid_next, 1) + 1);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  z ^= z >> 31;
+  snprintf(r->rid, sizeof r->rid, "%016llx", z);
+}
+
+/* The first call of a request: its headers are in.  Route it, and refuse
+ * now what can be refused from the headers alone. */
+static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
+                             srv__req *r, const char *url, const char *method) {
+  size_t ep;
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+  r->d = d;
+  r->c = c;
+  r->cn = ci ? ci->socket_context : NULL;
+  if (r->cn)
+    atomic_fetch_add(&r->cn->requests, 1);
+  r->t0 = srv__now();
+  r->ep = api_endpoint_count();
+  snprintf(r->method, sizeof r->method, "%s", method);
+  snprintf(r->path, sizeof r->path, "%s", url);
+  request_id(d, c, r);
+  r->gzip = srv__accepts_gzip(c);
+  client_of(d, c, r);
+  srv__cors_of(d, c, r);
+  srv_metrics_in_flight(d->metrics, +1);
+  const char *bad = smuggling(c);
+  if (bad) {
+    r->close = 1;
+    return srv__send_problem(c, r, API_P_BAD_REQUEST, bad, NULL, 0, NULL);
+  }
+  if (atomic_load(&d->draining))
+    return defer(r, API_P_SHUTTING_DOWN, "the server is shutting down", NULL);
+  int route = api_route(method, url, &ep);
+  if (route == 404)
+    return defer(r, API_P_NOT_FOUND, "no such resource; see /openapi.json",
+                 NULL);
+  const api_endpoint *row = api_endpoint_at(ep);
+  r->ep = ep;
+  if (!strcmp(method, "OPTIONS")) {
+    /* what the path takes; a browser's preflight (answered on the next
+     * call, with CORS headers when the origin is allowed) */
+    snprintf(r->preflight, sizeof r->preflight, "%s, OPTIONS", row->method);
+    return MHD_YES;
+  }
+  if (route == 405) {
+    snprintf(r->p_detail, sizeof r->p_detail, "%s takes %s", row->path,
+             row->method);
+    return defer(r, API_P_METHOD_NOT_ALLOWED, NULL, row->method);
+  }
+  if (row->run_class == API_RUN_INLINE)
+    return MHD_YES; /* answered on the next call */
+  r->is_post = 1;
+  const char *ct =
+      MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Type");
+  if (!is_json_type(ct))
+    return defer(r, API_P_MEDIA_TYPE,
+                 "send the body as Content-Type: application/json", NULL);
+  const char *cl =
+      MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Length");
+  if (cl) {
+    char *end;
+    errno = 0;
+    unsigned long long n = strtoull(cl, &end, 10);
+    if (errno == ERANGE || n > d->cfg.lim.max_body)
+      return too_large(d, c, r);
+  }
+  return MHD_YES;
+}
+
+/* ---- the body ------------------------------------------------------------ */
+
+/* A piece of the body: kept while it fits the limit, counted over it. */
+static enum MHD_Result take_body(struct srv_daemon *d, srv__req *r,
+                                 const char *data, size_t n) {
+  if (r->too_big || r->len + n > d->cfg.lim.max_body) {
+    r->too_big = 1;
+    return MHD_YES;
+  }
+  if (r->over_budget || srv__over_budget(d)) {
+    r->over_budget = 1; /* answered 503 once the body is in */
+    return MHD_YES;
+  }
+  if (r->len + n + 1 > r->cap) {
+    size_t cap = r->cap ? r->cap : 4096;
+    while (cap < r->len + n + 1)
+      cap *= 2;
+    char *b = realloc(r->buf, cap);
+    if (!b)
+      return MHD_NO;
+    r->buf = b;
+    r->cap = cap;
+  }
+  memcpy(r->buf + r->len, data, n);
+  r->len += n;
+  r->buf[r->len] = 0;
+  srv__hold(d, r, (long)n);
+  return MHD_YES;
+}
+
+/* ---- the api's answer ---------------------------------------------------- */
+
+/* One request to the api, with what the daemon knows of itself. */
+static void handle(struct srv_daemon *d, srv__req *r, api_response *ar) {
+  api_server_info info = srv__server_info(d, &r->job);
+  api_handle(r->ep, r->buf ? r->buf : "", r->len, &d->cfg.lim, &info, ar);
+  if (ar->status >= 500 && ar->status != 503)
+    fprintf(stderr, "stickslipd: %s %s answered %d: %.200s\n", r->method,
+            r->path, ar->status, ar->body ? ar->body : "");
+}
+
+/* ---- the pool's side of a request ---------------------------------------- */
+
+static void job_queued(srv_job *j) {
+  srv__req *r = (srv__req *)j;
+  if (r->cn)
+    atomic_fetch_add(&r->cn->suspended, 1);
+  MHD_suspend_connection(r->c);
+}
+
+/* Has the client of a suspended request gone away?  While a connection is
+ * suspended libmicrohttpd does not look at its socket, so the monitor asks
+ * here. */
+static int job_gone(srv_job *j) {
+  srv__req *r = (srv__req *)j;
+  return r->cn && srv__peer_closed(r->cn->fd);
+}
+
+/* The memory budget is checked again when the work starts: what was
+ * queued while it was free may find it spent. */
+static void job_run(srv_job *j) {
+  srv__req *r = (srv__req *)j;
+  if (srv__over_budget(r->d))
+    srv__budget_problem(r->d, &r->ar);
+  else
+    handle(r->d, r, &r->ar);
+  /* the answer counts from now on, not from when it is sent */
+  srv__hold(r->d, r, (long)r->ar.held);
+  r->ar.held = 0;
+  /* the body is no longer needed: give its bytes back now */
+  free(r->buf);
+  r->buf = NULL;
+  srv__hold(r->d, r, -(long)r->len);
+  r->len = r->cap = 0;
+}
+
+/* Back to the I/O thread with an answer: the pool is done with the job. */
+static void job_done(srv_job *j) {
+  srv__req *r = (srv__req *)j;
+  if (j->state == SRV_JOB_CANCELLED) {
+    api_response_free(&r->ar);
+    api_problem(&r->ar, API_P_CLIENT_CLOSED, "the client went away", NULL, NULL,
+                0);
+    srv_metrics_cancelled(r->d->metrics);
+  } else if (j->state == SRV_JOB_REFUSED) {
+    api_problem(&r->ar, API_P_SHUTTING_DOWN,
+                "the server is shutting down; retry on another replica or "
+                "later",
+                NULL, NULL, 0);
+  }
+  r->answered = 1;
+  if (r->cn)
+    atomic_fetch_add(&r->cn->resumed, 1);
+  MHD_resume_connection(r->c);
+}
+
+static const srv_job_ops REQUEST_JOB = {job_queued, job_run, job_done,
+                                        job_gone};
+
+/* Queue the computation, or refuse it at once. */
+static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
+                              srv__req *r) {
+  r->job.ops = &REQUEST_JOB;
+  int rc = srv_pool_submit(d->pool, &r->job, r->key);
+  if (rc == 0)
+    return MHD_YES; /* suspended by job_queued; resumed by job_done */
+  if (rc == SRV_POOL_FULL) {
+    char detail[128];
+    srv_metrics_busy(d->metrics);
+    snprintf(detail, sizeof detail,
+             "this client already has %u computations waiting; retry after "
+             "a second",
+             d->cfg.client_queue);
+    return srv__send_problem(c, r, API_P_OVERLOADED, detail, NULL, 0, NULL);
+  }
+  return srv__send_problem(
+      c, r, rc == SRV_POOL_NOMEM ? API_P_OUT_OF_MEMORY : API_P_SHUTTING_DOWN,
+      "the computation could not be queued", NULL, 0, NULL);
+}
+
+/* The body of a computation is in: refused at once while the daemon shuts
+ * down or the memory budget is spent; else a batch starts its answer, and
+ * any other request goes to the pool. */
+static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
+                               srv__req *r) {
+  if (atomic_load(&d->draining))
+    return srv__send_problem(c, r, API_P_SHUTTING_DOWN,
+                             "the server is shutting down", NULL, 0, NULL);
+  if (r->over_budget || srv__over_budget(d)) {
+    api_response ar;
+    srv__budget_problem(d, &ar);
+    return srv__send_api(c, r, &ar, NULL);
+  }
+  if (api_endpoint_at(r->ep)->run_class == API_RUN_BATCH)
+    return srv__batch_start(d, c, r);
+  return submit(d, c, r);
+}
+
+/* ---- libmicrohttpd's callbacks ------------------------------------------- */
+
+/* libmicrohttpd's handler: called with the headers, with each piece of the
+ * body, once the body is in, and again when the pool resumes the
+ * connection. */
+enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
+                             const char *url, const char *method,
+                             const char *version, const char *upload_data,
+                             size_t *upload_data_size, void **con_cls) {
+  struct srv_daemon *d = cls;
+  srv__req *r = *con_cls;
+  (void)version;
+  if (!r) {
+    if (!(r = calloc(1, sizeof *r)))
+      return MHD_NO;
+    *con_cls = r;
+    return admit(d, c, r, url, method);
+  }
+  if (r->answered) /* resumed by the pool */
+    return srv__send_api(c, r, &r->ar, NULL);
+  if (r->done || r->p_status) {
+    /* an answer is decided: discard whatever body still comes */
+    if (*upload_data_size || r->done) {
+      *upload_data_size = 0;
+      return MHD_YES;
+    }
+    srv__receiving(d, r->cn, 0); /* the monitor's deadline no longer runs */
+    return srv__send_problem(c, r, r->p_kind, r->p_detail, NULL, 0, r->p_allow);
+  }
+  if (*upload_data_size) {
+    size_t n = *upload_data_size;
+    *upload_data_size = 0;
+    return take_body(d, r, upload_data, n);
+  }
+  srv__receiving(d, r->cn, 0);
+  if (r->too_big)
+    return too_large(d, c, r);
+  if (r->preflight[0])
+    return srv__send_body(c, r, 204, NULL, 0, NULL, 0, r->preflight, 0);
+  if (!r->is_post) {
+    api_response ar;
+    if (d->etags[r->ep][0]) {
+      /* the contract and the explorer's files change only with the binary:
+       * a validator and a lifetime, and 304 to a client that has them */
+      r->etag = d->etags[r->ep];
+      const char *inm =
+          MHD_lookup_connection_value(c, MHD_HEADER_KIND, "If-None-Match");
+      /* the validator of the representation that would be sent */
+      char tag[40];
+      snprintf(tag, sizeof tag, "%.*s%s\"", (int)strlen(r->etag) - 1, r->etag,
+               r->gzip ? "-gzip" : "");
+      if (inm && (strstr(inm, tag) || !strcmp(inm, "*")))
+        return srv__send_body(c, r, 304, NULL, 0, "application/json", 0, NULL,
+                              0);
+    }
+    handle(d, r, &ar);
+    return srv__send_api(c, r, &ar, NULL);
+  }
+  return compute(d, c, r);
+}
+
+/* ---- completion: metrics and the access log ------------------------------ */
+
+/* A JSON string's contents (the path is the client's text). */
+static void json_text(FILE *f, const char *s) {
+  for (; *s; s++) {
+    unsigned char ch = (unsigned char)*s;
+    if (ch == '"' || ch == '\\')
+      fprintf(f, "\\%c", ch);
+    else if (ch < 0x20 || ch >= 0x7f)
+      fprintf(f, "\\u%04x", ch);
+    else
+      fputc(ch, f);
+  }
+}
+
+/* One line per request on stderr: JSON (default) or the plain
+ * "method path status us". */
+static void access_log(const struct srv_daemon *d, const srv__req *r,
+                       int status, double dt) {
+  long us = (long)(dt * 1e6);
+  if (d->cfg.log_plain) {
+    fprintf(stderr, "%s %s %d %ld\n", r->method, r->path, status, us);
+    return;
+  }
+  struct timespec ts;
+  struct tm tm;
+  char when[32];
+  clock_gettime(CLOCK_REALTIME, &ts);
+  gmtime_r(&ts.tv_sec, &tm);
+  strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%S", &tm);
+  flockfile(stderr);
+  fprintf(stderr, "{\"time\":\"%s.%03ldZ\",\"request_id\":\"", when,
+          ts.tv_nsec / 1000000);
+  json_text(stderr, r->rid);
+  fprintf(stderr, "\",\"client\":\"");
+  json_text(stderr, r->key);
+  fprintf(stderr, "\",\"method\":\"");
+  json_text(stderr, r->method);
+  fprintf(stderr, "\",\"path\":\"");
+  json_text(stderr, r->path);
+  fprintf(stderr, "\",\"status\":%d,\"bytes\":%zu,\"us\":%ld}\n", status,
+          r->bytes, us);
+  funlockfile(stderr);
+}
+
+/* libmicrohttpd's NOTIFY_COMPLETED: the request is answered, or its client
+ * gone. */
+void srv__completed(void *cls, struct MHD_Connection *c, void **con_cls,
+                    enum MHD_RequestTerminationCode toe) {
+  struct srv_daemon *d = cls;
+  srv__req *r = *con_cls;
+  (void)c;
+  (void)toe;
+  if (!r)
+    return;
+  double dt = srv__now() - r->t0;
+  int status = r->done ? r->status : 499; /* 499: client went away */
+  srv_metrics_observe(d->metrics, r->ep, status, dt);
+  srv_metrics_in_flight(d->metrics, -1);
+  if (r->batch)
+    r->bytes = srv__batch_detach(r->batch);
+  if (!d->cfg.quiet)
+    access_log(d, r, status, dt);
+  /* the next request on this connection has its own deadline */
+  srv__receiving(d, r->cn, 1);
+  srv_metrics_held(d->metrics, -r->held);
+  api_response_free(&r->ar);
+  free(r->buf);
+  free(r);
+  *con_cls = NULL;
+}
