@@ -10,8 +10,15 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+/* A test of several files (tests/http/fixture.h) defines
+ * TEST_SHARED_COUNTERS before including this header, and one of its files
+ * defines the two counters. */
+#ifdef TEST_SHARED_COUNTERS
+extern int test_failures_, test_checks_;
+#else
 static int test_failures_;
 static int test_checks_;
+#endif
 
 #define TEST_FAIL_(fmt, ...)                                                   \
   do {                                                                         \
