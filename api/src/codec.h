@@ -255,14 +255,17 @@ static inline double api__time_out(const api_params *ap, double t) {
   return t / ap->omega;
 }
 
-/* ---- encoding ---------------------------------------------------------- */
+/* ---- JSON values from numbers (values.c) -------------------------------- */
 
 /* Helpers that never emit NaN or Infinity: a non-finite value becomes
- * null. */
+ * null.  The echo of a request (decode.c) and the answers (encode.c) both
+ * build their numbers with these. */
 json_t *api__real(double v);
 json_t *api__vec4(const double x[4]);
 json_t *api__vec(const double *x, int n);
 int api__set(json_t *obj, const char *key, json_t *v);
+
+/* ---- encoding (encode.c) ----------------------------------------------- */
 
 /* A state in the request's units. */
 json_t *api__state(const api_params *ap, const double x[4]);

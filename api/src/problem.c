@@ -178,14 +178,3 @@ void api_problem(api_response *out, api_problem_kind kind, const char *detail,
   respond(out, (unsigned)kind < API_P_COUNT ? kind : API_P_INTERNAL, detail,
           pointer, limit, limit_value);
 }
-
-void api_response_free(api_response *r) {
-  if (!r)
-    return;
-  free(r->body);
-  api_stream_free(r->stream);
-  r->body = NULL;
-  r->stream = NULL;
-  r->len = 0;
-  r->held = 0;
-}

@@ -283,6 +283,18 @@ void api_stream_free(api_stream *s) {
   free(s);
 }
 
+/* A response holds the text written here, or a stream of it. */
+void api_response_free(api_response *r) {
+  if (!r)
+    return;
+  free(r->body);
+  api_stream_free(r->stream);
+  r->body = NULL;
+  r->stream = NULL;
+  r->len = 0;
+  r->held = 0;
+}
+
 /* @a j (consumed by the caller) cut into a stream; NULL when out of
  * memory. */
 static api_stream *stream_of(const json_t *j, const api_lazies *lz,
