@@ -8,7 +8,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec.h"
+#include "encode.h"
+#include "decode.h"
+#include "samples.h"
+#include "values.h"
+#include "writer.h"
 
 json_t *api__state(const api_params *ap, const double x[4]) {
   double y[4];

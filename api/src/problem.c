@@ -8,7 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec.h"
+#include <jansson.h>
+
+#include "problem.h"
 
 typedef struct problem_row {
   int status;

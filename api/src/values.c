@@ -4,7 +4,7 @@
  */
 #include <math.h>
 
-#include "codec.h"
+#include "values.h"
 
 json_t *api__real(double v) { return isfinite(v) ? json_real(v) : json_null(); }
 

@@ -15,7 +15,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec.h"
+#include "writer.h"
+#include "problem.h"
+#include "shortest.h"
 
 /* ---- the buffer ---------------------------------------------------------- */
 
