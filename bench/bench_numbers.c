@@ -17,7 +17,7 @@
 #include <string.h>
 
 #include "bench_common.h"
-#include "codec.h"
+#include "shortest.h"
 
 enum { N = 1000000, RUNS = 7 };
 

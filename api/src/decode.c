@@ -15,7 +15,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec.h"
+#include "decode.h"
+#include "problem.h"
+#include "values.h"
 
 /* A key as it may be shown back to the client: printable ASCII, at most 40
  * characters, the rest elided. */

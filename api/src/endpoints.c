@@ -9,6 +9,8 @@
 #include <time.h>
 
 #include "endpoints.h"
+#include "problem.h"
+#include "writer.h"
 
 typedef struct ep_row {
   api_endpoint pub;

@@ -23,7 +23,12 @@
 #ifndef SS_API_ENDPOINTS_H
 #define SS_API_ENDPOINTS_H
 
-#include "codec.h"
+#include <jansson.h>
+#include <stddef.h>
+
+#include "call.h"
+#include "problem.h"
+#include "stickslip_api.h"
 
 /*     name       method  path             label        class
  *     decode                 run                  encode
@@ -74,5 +79,17 @@ typedef void ep_release_fn(void *x);
   ep_release_fn rel;
 API_ENDPOINTS(API_EP_DECLARE)
 #undef API_EP_DECLARE
+
+/* A request body as a JSON object (nesting depth at most lim->max_depth,
+ * no duplicate keys), or NULL with the problem in @a e. */
+json_t *api__parse(const char *body, size_t len, const api_limits *lim,
+                   api_err *e);
+
+/* Serve endpoint @a index as api_handle does; a problem's pointer, when it
+ * names a field, is prefixed by @a prefix (NULL: none), for an answer read
+ * as part of a larger document (an item of a batch). */
+int api__handle(size_t index, const char *body, size_t len,
+                const api_limits *lim, const api_server_info *srv,
+                api_response *out, const char *prefix);
 
 #endif

@@ -9,6 +9,10 @@
 #include <string.h>
 
 #include "endpoints.h"
+#include "decode.h"
+#include "encode.h"
+#include "problem.h"
+#include "values.h"
 
 static const char *const VARIABLES[] = {"x1", "x2", "v1", "v2", NULL};
 

@@ -20,6 +20,9 @@
 #include <time.h>
 
 #include "endpoints.h"
+#include "decode.h"
+#include "problem.h"
+#include "writer.h"
 
 typedef struct batch_item {
   char *id;     /* the compact JSON text of its id; "null" when none */

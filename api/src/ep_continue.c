@@ -9,6 +9,10 @@
 #include <string.h>
 
 #include "endpoints.h"
+#include "decode.h"
+#include "encode.h"
+#include "problem.h"
+#include "values.h"
 
 /* The dimensionless parameters (ss_param_id), then the physical ones
  * (ss_phys_id + 5) for a request in physical units. */

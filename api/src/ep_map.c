@@ -16,6 +16,9 @@
 #include <time.h>
 
 #include "endpoints.h"
+#include "decode.h"
+#include "problem.h"
+#include "writer.h"
 
 static const char *const KINDS[] = {"overshoot", "stick-slip", "other", "all",
                                     NULL};

@@ -11,6 +11,9 @@
 #include <gsl/gsl_version.h>
 
 #include "endpoints.h"
+#include "problem.h"
+#include "values.h"
+#include "writer.h"
 
 int ep_meta_decode(const json_t *root, const api_call *c, void **x) {
   (void)root;

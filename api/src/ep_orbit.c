@@ -6,6 +6,11 @@
 #include <string.h>
 
 #include "endpoints.h"
+#include "decode.h"
+#include "encode.h"
+#include "problem.h"
+#include "samples.h"
+#include "values.h"
 
 static const char *const KINDS[] = {"overshoot", "stick-slip", "other", "all",
                                     NULL};

@@ -8,6 +8,12 @@
 #include <string.h>
 
 #include "endpoints.h"
+#include "decode.h"
+#include "encode.h"
+#include "problem.h"
+#include "samples.h"
+#include "values.h"
+#include "writer.h"
 
 typedef struct sim_x {
   /* the request, in its own units */

@@ -8,6 +8,10 @@
 #include <string.h>
 
 #include "endpoints.h"
+#include "decode.h"
+#include "encode.h"
+#include "problem.h"
+#include "values.h"
 
 typedef struct stab_orbit {
   api_phases phases;

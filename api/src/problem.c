@@ -8,7 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec.h"
+#include <jansson.h>
+
+#include "problem.h"
 
 typedef struct problem_row {
   int status;
@@ -177,15 +179,4 @@ void api_problem(api_response *out, api_problem_kind kind, const char *detail,
                  const char *pointer, const char *limit, double limit_value) {
   respond(out, (unsigned)kind < API_P_COUNT ? kind : API_P_INTERNAL, detail,
           pointer, limit, limit_value);
-}
-
-void api_response_free(api_response *r) {
-  if (!r)
-    return;
-  free(r->body);
-  api_stream_free(r->stream);
-  r->body = NULL;
-  r->stream = NULL;
-  r->len = 0;
-  r->held = 0;
 }

@@ -7,7 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec.h"
+#include "samples.h"
+#include "decode.h"
+#include "problem.h"
+#include "values.h"
 
 const char *const API_SAMPLE_COLUMNS[] = {"t",    "x1",    "x2", "v1", "v2",
                                           "mode", "force", "F1", "F2", NULL};

@@ -18,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec.h"
+#include "shortest.h"
 
 typedef struct {
   uint64_t f;

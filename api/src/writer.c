@@ -15,7 +15,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec.h"
+#include "writer.h"
+#include "problem.h"
+#include "shortest.h"
 
 /* ---- the buffer ---------------------------------------------------------- */
 
@@ -281,6 +283,18 @@ void api_stream_free(api_stream *s) {
   if (s->release)
     s->release(s->x);
   free(s);
+}
+
+/* A response holds the text written here, or a stream of it. */
+void api_response_free(api_response *r) {
+  if (!r)
+    return;
+  free(r->body);
+  api_stream_free(r->stream);
+  r->body = NULL;
+  r->stream = NULL;
+  r->len = 0;
+  r->held = 0;
 }
 
 /* @a j (consumed by the caller) cut into a stream; NULL when out of

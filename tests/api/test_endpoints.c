@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec.h"
+#include "problem.h"
 #include "stickslip_api.h"
 #include "test.h"
 

@@ -21,7 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "codec.h"
+#include "shortest.h"
 #include "test.h"
 
 static struct { long n, exact, fallback, bad; } st;
