@@ -1098,6 +1098,65 @@ static void note_undecided(ss__certificate *c, int nv, const iv *X) {
     }
 }
 
+/* The root proved unique in H (E its interval of the unknowns) recorded;
+ * if it cannot be told apart from one recorded before, box X (which holds
+ * it) noted undecided.  SS_ENOMEM when there is no room for it. */
+static int record_root(ss__certificate *c, int nv, const iv *H, const iv *E,
+                       const iv *X) {
+  int k = add_root(c, nv, H, E);
+  if (k == -2)
+    return SS_ENOMEM;
+  if (k == -1)
+    note_undecided(c, nv, X);
+  return SS_OK;
+}
+
+/* The side to halve X across: the widest relative to the starting box's
+ * widths W (its relative width in *rel); the states (s1, s2) weigh less:
+ * they follow from the durations. */
+static int widest_side(int nv, const iv *X, const double *W, double *rel) {
+  int w = 0;
+  *rel = 0;
+  for (int i = 0; i < nv; i++) {
+    double v = (X[i].hi - X[i].lo) / W[i] * (i >= nv - 2 ? STATE_WEIGHT : 1);
+    if (v > *rel) {
+      *rel = v;
+      w = i;
+    }
+  }
+  return w;
+}
+
+/* A small box X that is not decided may hold a root near its face: prove
+ * it in a box H around Newton's point that holds X.  1 when that decides X
+ * (H holds no root, or its root is recorded: *rc SS_OK, or SS_ENOMEM when
+ * there was no room for it), 0 when X is still to be halved. */
+static int decide_near_newton(const problem *P, const iv *X,
+                              ss__certificate *out, int *rc) {
+  int nv = P->nv;
+  double rp[NV];
+  if (!newton_point(P, X, rp))
+    return 0;
+  iv H[NV], EH[NV];
+  for (int i = 0; i < nv; i++) {
+    double wi = X[i].hi - X[i].lo;
+    H[i].lo = fmin(X[i].lo, rp[i] - 0.25 * wi);
+    H[i].hi = fmax(X[i].hi, rp[i] + 0.25 * wi);
+  }
+  iv Hc[NV];
+  memcpy(Hc, H, sizeof H);
+  int rh = box_test(P, Hc, EH);
+  if (rh == 0)
+    return 1; /* H, and X in it, holds no root */
+  if (rh == 1) {
+    /* unique in Hc, which box_test narrowed: by the phases' rules too, so
+     * a root that breaks one may lie in H outside Hc */
+    *rc = record_root(out, nv, Hc, EH, X);
+    return 1;
+  }
+  return 0;
+}
+
 int ss__certify_period1(const ss_model *m, int n, const double lo[4],
                         const double hi[4], double stick_lo, double stick_hi,
                         long max_boxes, int (*stop)(void *), void *stop_cls,
@@ -1142,55 +1201,16 @@ int ss__certify_period1(const ss_model *m, int n, const double lo[4],
     if (r == 0)
       continue;
     if (r == 1) {
-      int k = add_root(out, nv, X, E);
-      if (k == -2) {
-        rc = SS_ENOMEM;
+      if ((rc = record_root(out, nv, X, E, X)))
         break;
-      }
-      if (k == -1)
-        note_undecided(out, nv, X);
       continue;
     }
-    /* halve across the widest side, relative to the box's; the states
-     * (s1, s2) weigh less: they follow from the durations */
-    int w = 0;
-    double rel = 0;
-    for (int i = 0; i < nv; i++) {
-      double v = (X[i].hi - X[i].lo) / W[i] * (i >= nv - 2 ? STATE_WEIGHT : 1);
-      if (v > rel) {
-        rel = v;
-        w = i;
-      }
-    }
-    /* a small box that is not decided may hold a root near its face:
-     * prove it in a box around Newton's point that holds X */
-    if (rel < INFLATE_BELOW) {
-      double rp[NV];
-      if (newton_point(&P, X, rp)) {
-        iv H[NV], EH[NV];
-        for (int i = 0; i < nv; i++) {
-          double wi = X[i].hi - X[i].lo;
-          H[i].lo = fmin(X[i].lo, rp[i] - 0.25 * wi);
-          H[i].hi = fmax(X[i].hi, rp[i] + 0.25 * wi);
-        }
-        iv Hc[NV];
-        memcpy(Hc, H, sizeof H);
-        int rh = box_test(&P, Hc, EH);
-        if (rh == 0)
-          continue; /* H, and X in it, holds no root */
-        if (rh == 1) {
-          /* unique in Hc, which box_test narrowed: by the phases' rules
-           * too, so a root that breaks one may lie in H outside Hc */
-          int k = add_root(out, nv, Hc, EH);
-          if (k == -2) {
-            rc = SS_ENOMEM;
-            break;
-          }
-          if (k == -1)
-            note_undecided(out, nv, X);
-          continue;
-        }
-      }
+    double rel;
+    int w = widest_side(nv, X, W, &rel);
+    if (rel < INFLATE_BELOW && decide_near_newton(&P, X, out, &rc)) {
+      if (rc)
+        break;
+      continue;
     }
     if (!((X[w].hi - X[w].lo) / W[w] > MIN_WIDTH) || top + 2 > STACK_MAX) {
       note_undecided(out, nv, X);

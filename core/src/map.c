@@ -424,19 +424,10 @@ static int spread(mapper *mp, ss_diag *d) {
   return mp->stopped;
 }
 
-int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
-               const ss_map_opts *opts, ss_map *map, ss_diag *d) {
-  ss_map_opts def;
-  memset(&def, 0, sizeof def);
-  if (!map)
-    return ss__fail(d, SS_EINVAL, "map", 0, "missing output");
-  memset(map, 0, sizeof *map);
-  if (!opts)
-    opts = &def;
-  if ((!p && !opts->physical) || !axes)
-    return ss__fail(d, SS_EINVAL, "params", 0, "missing parameters or axes");
-  if (n_axes < 1 || n_axes > 2)
-    return ss__fail(d, SS_EINVAL, "axes", n_axes, "a map has 1 or 2 axes");
+/* The axes: each a parameter the map knows, finite ends, at least one
+ * point, the two different; their product (*cells) within the limit. */
+static int check_axes(int n_axes, const ss_map_axis *axes,
+                      const ss_map_opts *opts, long *cells_out, ss_diag *d) {
   long cells = 1;
   for (int a = 0; a < n_axes; a++) {
     const ss_map_axis *x = &axes[a];
@@ -457,6 +448,39 @@ int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
     return ss__fail(d, SS_EINVAL, "axes", 1,
                     "the two axes name the same parameter, %s",
                     axis_name(opts, axes[0].param));
+  *cells_out = cells;
+  return SS_OK;
+}
+
+/* The run's status, with its reason in d. */
+static int map_status(int rc, const ss_map_opts *opts, ss_diag *d) {
+  if (rc == SS_ELIMIT_TIME)
+    return ss__fail(d, rc, "max_seconds", opts->max_seconds,
+                    "the map ran out of its %g s budget", opts->max_seconds);
+  if (rc == SS_ECANCELED)
+    return ss__fail(d, rc, "", 0, "the map was cancelled");
+  if (rc == SS_ENOMEM)
+    return ss__fail(d, rc, "", 0, "out of memory for the map");
+  return rc;
+}
+
+int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
+               const ss_map_opts *opts, ss_map *map, ss_diag *d) {
+  ss_map_opts def;
+  memset(&def, 0, sizeof def);
+  if (!map)
+    return ss__fail(d, SS_EINVAL, "map", 0, "missing output");
+  memset(map, 0, sizeof *map);
+  if (!opts)
+    opts = &def;
+  if ((!p && !opts->physical) || !axes)
+    return ss__fail(d, SS_EINVAL, "params", 0, "missing parameters or axes");
+  if (n_axes < 1 || n_axes > 2)
+    return ss__fail(d, SS_EINVAL, "axes", n_axes, "a map has 1 or 2 axes");
+  long cells = 0;
+  int rc = check_axes(n_axes, axes, opts, &cells, d);
+  if (rc)
+    return rc;
   if (opts->search_every < 0 || opts->max_orbits < 0)
     return ss__fail(d, SS_EINVAL, "search_every", opts->search_every,
                     "search_every and max_orbits are >= 0");
@@ -485,7 +509,7 @@ int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
   /* every cell's parameters in range, before any work */
   for (int i = 0; i < map->n_cells; i++) {
     ss_params q;
-    int rc = ss_map_params(p, opts, map, i, &q, NULL, d);
+    rc = ss_map_params(p, opts, map, i, &q, NULL, d);
     if (rc != SS_OK) {
       map->n_cells = 0;
       return rc;
@@ -501,7 +525,7 @@ int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
     return ss__fail(d, SS_ENOMEM, "", 0, "out of memory for the map");
   }
   int every = opts->search_every ? opts->search_every : MAP_SEARCH_EVERY;
-  int *todo = malloc((size_t)cells * sizeof *todo), n_todo = 0, rc = SS_OK;
+  int *todo = malloc((size_t)cells * sizeof *todo), n_todo = 0;
   if (!todo)
     rc = SS_ENOMEM;
   /* the lattice */
@@ -534,12 +558,5 @@ int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
   free(mp.w);
   free(mp.queue);
   free(mp.failed);
-  if (rc == SS_ELIMIT_TIME)
-    return ss__fail(d, rc, "max_seconds", opts->max_seconds,
-                    "the map ran out of its %g s budget", opts->max_seconds);
-  if (rc == SS_ECANCELED)
-    return ss__fail(d, rc, "", 0, "the map was cancelled");
-  if (rc == SS_ENOMEM)
-    return ss__fail(d, rc, "", 0, "out of memory for the map");
-  return rc;
+  return map_status(rc, opts, d);
 }

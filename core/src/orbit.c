@@ -381,15 +381,22 @@ static void check_fail(ss_diag *d, const char *fmt, int k, ss_mode m, double a,
   ss__fail(d, SS_INFEASIBLE, where, a, fmt, k, ss_mode_name(m), a, b);
 }
 
-int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
-  const ss_params *p = &m->p;
-  const int n = o->n_phases;
-  ss_sim sim;
-  ss_margin *all[] = {&o->slip_below, &o->over_above, &o->stick_upper,
-                      &o->stick_lower, &o->switching};
-  if (n < 2 || n > MAXP)
-    return ss__fail(d, SS_EINVAL, "phases", n, "bad phase count");
-  for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
+/* The value margins ss_orbit_check() fills, in the order the smallest is
+ * chosen (after the switching margin, the first of a tie kept). */
+#define N_VALUE_MARGINS 5
+static void value_margins(ss_orbit *o, ss_margin *all[N_VALUE_MARGINS]) {
+  all[0] = &o->slip_below;
+  all[1] = &o->over_above;
+  all[2] = &o->stick_upper;
+  all[3] = &o->stick_lower;
+  all[4] = &o->switching;
+}
+
+/* Every margin unbound, no violation, no period yet. */
+static void check_reset(ss_orbit *o) {
+  ss_margin *all[N_VALUE_MARGINS];
+  value_margins(o, all);
+  for (int i = 0; i < N_VALUE_MARGINS; i++) {
     all[i]->value = INFINITY;
     all[i]->phase = -1;
     all[i]->t = 0;
@@ -404,6 +411,11 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
   o->violation.t = 0;
   o->period = 0;
   o->n_turns = 0;
+}
+
+/* Each duration positive; the period and the passes through Sigma0. */
+static int check_durations(ss_orbit *o, ss_diag *d) {
+  const int n = o->n_phases;
   for (int k = 0; k < n; k++) {
     if (!(o->durations[k] > 0)) {
       violate(o, "duration", o->durations[k], k, 0);
@@ -416,135 +428,199 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
         (k + 1 == n || o->modes[k + 1] == SS_MODE_SLIP))
       o->n_turns++;
   }
+  return SS_OK;
+}
+
+/* The value margins of phase k (mode, then want, of duration tau from xs)
+ * from its closed form. */
+static void phase_margins(const ss_model *m, ss_orbit *o, int k, ss_mode mode,
+                          ss_mode want, const double xs[4], double tau) {
+  ss_trig g;
+  max_ctx mc = {NULL, k};
+  if (mode == SS_MODE_STICK) {
+    /* (2.7) on both sides: ur - chi(x2-x1) and ur + chi(x2-x1).  The side
+     * the stick ends on is zero at the end by construction, so only its
+     * interior maxima count; the other side counts at both ends too. */
+    int end_sign = want == SS_MODE_OVERSHOOT ? -1 : 1;
+    for (int side = 1; side >= -1; side -= 2) {
+      mc.mg = side > 0 ? &o->stick_upper : &o->stick_lower;
+      ss__switching(m, mode, side, xs, &g);
+      interior_maxima(&g, tau, record_max, &mc);
+      if (side != end_sign) {
+        double v0[1], v1[1];
+        ss_trig_eval(&g, 0, 0, v0);
+        ss_trig_eval(&g, tau, 0, v1);
+        margin_set(mc.mg, -v0[0], k, 0);
+        margin_set(mc.mg, -v1[0], k, tau);
+      }
+    }
+  } else {
+    mc.mg = mode == SS_MODE_SLIP ? &o->slip_below : &o->over_above;
+    ss__switching(m, mode, 0, xs, &g);
+    interior_maxima(&g, tau, record_max, &mc);
+  }
+}
+
+/* The end switching function's value and slope at the end of phase k: a
+ * slope > 0 is a transversal crossing. */
+static void phase_end_slope(const ss_model *m, ss_orbit *o, int k, ss_mode mode,
+                            ss_mode want, const double xs[4], double tau,
+                            double *g_end, double *g_slope) {
+  ss_trig ge;
+  double v[2];
+  ss__end_switching(m, mode, want, xs, &ge);
+  ss_trig_eval(&ge, tau, 1, v);
+  margin_set(&o->transversal, v[1], k, tau);
+  *g_end = v[0];
+  *g_slope = v[1];
+}
+
+/* The certified finder: the first event of phase k (started at t0k of the
+ * run) must be its end, at the sum of the durations up to it (t_expect),
+ * not earlier, and not a tangency. */
+static int phase_event(ss_orbit *o, ss_sim *sim, int k, double t0k,
+                       double g_end, double t_expect, ss_event *ev,
+                       ss_diag *d) {
+  double tau = o->durations[k], slack = 1e-7 * (1 + tau);
+  ss_mode mode = o->modes[k];
+  int rc = ss_sim_next_event(sim, ss_sim_time(sim) + tau + slack, ev);
+  if (rc == SS_HORIZON) {
+    violate(o, "phase_end", g_end, k, tau);
+    return ss__fail(d, SS_INFEASIBLE, "phases", tau,
+                    "phase %d (%s) does not end at its duration %.9g: its "
+                    "switching function does not reach zero",
+                    k, ss_mode_name(mode), tau);
+  }
+  if (rc)
+    return ss__fail(d, rc, "phases", tau, "event search failed");
+  if (ev->kind == SS_EVENT_GRAZING) {
+    violate(o, "grazing", 0, k, ev->t - t0k);
+    check_fail(d,
+               "phase %d (%s) touches its switching surface tangentially at "
+               "t = %.9g (duration %.9g): a grazing orbit",
+               k, mode, ev->t, tau);
+    return SS_INFEASIBLE;
+  }
+  if (ev->from != mode)
+    return ss__fail(d, SS_EBUG, "phases", k, "mode mismatch");
+  /* compare the end time, measured from the start of the run */
+  if (ev->t < t_expect - slack * (k + 1)) {
+    violate(o, "ends_early", ev->t - t_expect, k, ev->t - t0k);
+    check_fail(d,
+               "phase %d (%s) ends early, at its first crossing t = %.9g "
+               "instead of %.9g",
+               k, mode, ev->t, t_expect);
+    return SS_INFEASIBLE;
+  }
+  return SS_OK;
+}
+
+/* Falling (or flat) at its end, the switching function was above zero just
+ * before: it crossed zero earlier, and the phase ends early, however little
+ * (within the slack of phase_event: beside a tangency at the end, by about
+ * 2 |slope| / |curvature|). */
+static int phase_transversal(ss_orbit *o, int k, double g_end, double g_slope,
+                             ss_diag *d) {
+  double tau = o->durations[k];
+  ss_mode mode = o->modes[k];
+  if (!(g_slope > 0)) {
+    violate(o, "transversality", g_slope, k, tau);
+    check_fail(d,
+               "phase %d (%s) meets its end with the switching function's "
+               "slope %.3g <= 0: it crossed zero before, so it ends early "
+               "(its value there %.3g)",
+               k, mode, g_slope, g_end);
+    return SS_INFEASIBLE;
+  }
+  return SS_OK;
+}
+
+/* The switching conditions at the end of phase k (event ev): the margin of
+ * the mode rule, and the next mode must be the sequence's. */
+static int phase_switching(const ss_model *m, ss_orbit *o, int k, ss_mode want,
+                           const ss_event *ev, ss_diag *d) {
+  const ss_params *p = &m->p;
+  double tau = o->durations[k];
+  ss_mode mode = o->modes[k];
+  double f = ss_stick_force(m, ev->x), sw = INFINITY;
+  if (mode == SS_MODE_SLIP)
+    sw = want == SS_MODE_OVERSHOOT ? -p->ur - f /* (3.2) */ : f + p->ur;
+  else if (mode == SS_MODE_OVERSHOOT)
+    sw = want == SS_MODE_STICK ? p->ur - f /* (3.4) */ : f - p->ur;
+  if (mode != SS_MODE_STICK)
+    margin_set(&o->switching, sw, k, tau);
+  if (ev->to != want) {
+    violate(o, "switching", mode == SS_MODE_STICK ? 0 : fmin(sw, 0), k, tau);
+    if (mode == SS_MODE_SLIP && want == SS_MODE_OVERSHOOT)
+      check_fail(d,
+                 "the solution violates (3.2) at the end of slip (phase %d, "
+                 "%s): chi(x2-x1) + ur = %.6g must be < 0 (margin %.3g)",
+                 k, mode, f + p->ur, -p->ur - f);
+    else
+      check_fail(d,
+                 "phase %d (%s) is followed by the wrong mode: chi(x2-x1) = "
+                 "%.9g at its end (margin %.3g)",
+                 k, mode, f, o->switching.value);
+    return SS_INFEASIBLE;
+  }
+  return SS_OK;
+}
+
+/* Phase k from the simulation's state: its margins, its end by the
+ * certified finder, and the mode that follows. */
+static int check_phase(const ss_model *m, ss_orbit *o, ss_sim *sim, int k,
+                       double t0k, double t_expect, ss_diag *d) {
+  const int n = o->n_phases;
+  double tau = o->durations[k], xs[4], g_end, g_slope;
+  ss_mode mode = o->modes[k], want = k + 1 < n ? o->modes[k + 1] : SS_MODE_SLIP;
+  ss_event ev;
+  int rc;
+  memcpy(xs, sim->x, sizeof xs);
+  phase_margins(m, o, k, mode, want, xs, tau);
+  phase_end_slope(m, o, k, mode, want, xs, tau, &g_end, &g_slope);
+  if ((rc = phase_event(o, sim, k, t0k, g_end, t_expect, &ev, d)) ||
+      (rc = phase_transversal(o, k, g_end, g_slope, d)))
+    return rc;
+  return phase_switching(m, o, k, want, &ev, d);
+}
+
+/* Back at the start: the closure, and the smallest value margin. */
+static void check_close(const ss_model *m, ss_orbit *o, const double x[4]) {
+  ss_margin *all[N_VALUE_MARGINS];
+  double ze[4];
+  value_margins(o, all);
+  ss_x_to_z(m, x, ze);
+  o->closure = 0;
+  for (int i = 0; i < 4; i++)
+    o->closure = fmax(o->closure, fabs(ze[i] - o->z0[i]));
+  o->min_margin = o->switching;
+  for (int i = 0; i < N_VALUE_MARGINS; i++)
+    if (all[i]->value < o->min_margin.value)
+      o->min_margin = *all[i];
+}
+
+int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
+  const int n = o->n_phases;
+  ss_sim sim;
+  int rc;
+  if (n < 2 || n > MAXP)
+    return ss__fail(d, SS_EINVAL, "phases", n, "bad phase count");
+  check_reset(o);
+  if ((rc = check_durations(o, d)))
+    return rc;
   ss_z_to_x(m, o->z0, o->x0);
   if (ss__sim_init_mode(&sim, m, 0, o->x0, SS_MODE_SLIP, d))
     return SS_EINVAL;
   double t0k = 0; /* the start of phase k */
   for (int k = 0; k < n; k++) {
-    double tau = o->durations[k], xs[4], g_end, g_slope;
-    ss_mode mode = o->modes[k],
-            want = k + 1 < n ? o->modes[k + 1] : SS_MODE_SLIP;
-    double slack = 1e-7 * (1 + tau);
-    ss_event ev;
-    memcpy(xs, sim.x, sizeof xs);
-    /* margins of this phase from its closed form */
-    ss_trig g;
-    max_ctx mc = {NULL, k};
-    if (mode == SS_MODE_STICK) {
-      /* (2.7) on both sides: ur - chi(x2-x1) and ur + chi(x2-x1).  The side
-       * the stick ends on is zero at the end by construction, so only its
-       * interior maxima count; the other side counts at both ends too. */
-      int end_sign = want == SS_MODE_OVERSHOOT ? -1 : 1;
-      for (int side = 1; side >= -1; side -= 2) {
-        mc.mg = side > 0 ? &o->stick_upper : &o->stick_lower;
-        ss__switching(m, mode, side, xs, &g);
-        interior_maxima(&g, tau, record_max, &mc);
-        if (side != end_sign) {
-          double v0[1], v1[1];
-          ss_trig_eval(&g, 0, 0, v0);
-          ss_trig_eval(&g, tau, 0, v1);
-          margin_set(mc.mg, -v0[0], k, 0);
-          margin_set(mc.mg, -v1[0], k, tau);
-        }
-      }
-    } else {
-      mc.mg = mode == SS_MODE_SLIP ? &o->slip_below : &o->over_above;
-      ss__switching(m, mode, 0, xs, &g);
-      interior_maxima(&g, tau, record_max, &mc);
-    }
-    {
-      /* slope of the switching function at the end: > 0 is a transversal
-       * crossing */
-      ss_trig ge;
-      double v[2];
-      ss__end_switching(m, mode, want, xs, &ge);
-      ss_trig_eval(&ge, tau, 1, v);
-      margin_set(&o->transversal, v[1], k, tau);
-      g_end = v[0];
-      g_slope = v[1];
-    }
-    /* the certified finder: the first event must be this phase's end */
-    int rc = ss_sim_next_event(&sim, ss_sim_time(&sim) + tau + slack, &ev);
-    if (rc == SS_HORIZON) {
-      violate(o, "phase_end", g_end, k, tau);
-      return ss__fail(d, SS_INFEASIBLE, "phases", tau,
-                      "phase %d (%s) does not end at its duration %.9g: its "
-                      "switching function does not reach zero",
-                      k, ss_mode_name(mode), tau);
-    }
-    if (rc)
-      return ss__fail(d, rc, "phases", tau, "event search failed");
-    if (ev.kind == SS_EVENT_GRAZING) {
-      violate(o, "grazing", 0, k, ev.t - t0k);
-      check_fail(d,
-                 "phase %d (%s) touches its switching surface tangentially at "
-                 "t = %.9g (duration %.9g): a grazing orbit",
-                 k, mode, ev.t, tau);
-      return SS_INFEASIBLE;
-    }
-    if (ev.from != mode)
-      return ss__fail(d, SS_EBUG, "phases", k, "mode mismatch");
-    /* compare the end time, measured from the start of the run */
-    double t_expect = 0;
+    double t_expect = 0; /* its end */
     for (int i = 0; i <= k; i++)
       t_expect += o->durations[i];
-    if (ev.t < t_expect - slack * (k + 1)) {
-      violate(o, "ends_early", ev.t - t_expect, k, ev.t - t0k);
-      check_fail(d,
-                 "phase %d (%s) ends early, at its first crossing t = %.9g "
-                 "instead of %.9g",
-                 k, mode, ev.t, t_expect);
-      return SS_INFEASIBLE;
-    }
-    /* falling (or flat) at its end, the switching function was above zero
-     * just before: it crossed zero earlier, and the phase ends early,
-     * however little (within the slack above: beside a tangency at the
-     * end, by about 2 |slope| / |curvature|) */
-    if (!(g_slope > 0)) {
-      violate(o, "transversality", g_slope, k, tau);
-      check_fail(d,
-                 "phase %d (%s) meets its end with the switching function's "
-                 "slope %.3g <= 0: it crossed zero before, so it ends early "
-                 "(its value there %.3g)",
-                 k, mode, g_slope, g_end);
-      return SS_INFEASIBLE;
-    }
-    /* the switching conditions at the end of the phase */
-    double f = ss_stick_force(m, ev.x), sw = INFINITY;
-    if (mode == SS_MODE_SLIP)
-      sw = want == SS_MODE_OVERSHOOT ? -p->ur - f /* (3.2) */ : f + p->ur;
-    else if (mode == SS_MODE_OVERSHOOT)
-      sw = want == SS_MODE_STICK ? p->ur - f /* (3.4) */ : f - p->ur;
-    if (mode != SS_MODE_STICK)
-      margin_set(&o->switching, sw, k, tau);
-    if (ev.to != want) {
-      violate(o, "switching", mode == SS_MODE_STICK ? 0 : fmin(sw, 0), k, tau);
-      if (mode == SS_MODE_SLIP && want == SS_MODE_OVERSHOOT)
-        check_fail(d,
-                   "the solution violates (3.2) at the end of slip (phase %d, "
-                   "%s): chi(x2-x1) + ur = %.6g must be < 0 (margin %.3g)",
-                   k, mode, f + p->ur, -p->ur - f);
-      else
-        check_fail(d,
-                   "phase %d (%s) is followed by the wrong mode: chi(x2-x1) = "
-                   "%.9g at its end (margin %.3g)",
-                   k, mode, f, o->switching.value);
-      return SS_INFEASIBLE;
-    }
+    if ((rc = check_phase(m, o, &sim, k, t0k, t_expect, d)))
+      return rc;
     t0k = t_expect;
   }
-  /* closure: back at the start? */
-  {
-    double ze[4];
-    ss_x_to_z(m, sim.x, ze);
-    o->closure = 0;
-    for (int i = 0; i < 4; i++)
-      o->closure = fmax(o->closure, fabs(ze[i] - o->z0[i]));
-  }
-  o->min_margin = o->switching;
-  for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
-    if (all[i]->value < o->min_margin.value)
-      o->min_margin = *all[i];
+  check_close(m, o, sim.x);
   return SS_OK;
 }
 

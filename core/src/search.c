@@ -29,6 +29,7 @@
 #define MAP_NEWTON_ITERS 30
 #define SS_SCAN_PERIODS 1.5 /* the box of the scan, in slow modal periods */
 #define SCAN_MAX_ROOTS 256
+#define MAX_SEEDS 42 /* the finest grid of seeds, 7 x 6 */
 
 typedef struct collect {
   const ss_model *m;
@@ -233,18 +234,15 @@ static int in_root(const ss__cert_root *r, const double *u) {
   return 1;
 }
 
-static void certify_family(collect *c, int f, double dmax, double seconds,
-                           ss_family_cert *fc) {
-  const ss_model *m = c->m;
+/* The box of family f's proof, recorded in fc: the durations from tlo (the
+ * stick from below) to dmax, the start within CERT_STATE_BOX units of d0;
+ * lo and hi in the proof's unknowns (t1, t2, x1, x1'). */
+static void cert_box(const ss_model *m, int f, double dmax, double tlo,
+                     double below, ss_family_cert *fc, double lo[4],
+                     double hi[4]) {
   const ss_params *p = &m->p;
-  const ss_mode *seq = FAMILY_SEQ[f];
   int n = 2 + f;
   double L = CERT_STATE_BOX * fmax(p->V, p->ur / p->chi);
-  double tlo = CERT_SLIP_MIN * SS_TWO_PI / m->w[1];
-  /* the stick reaches a little below zero, so that a root with a stick of
-   * length zero lies inside and is proved (and rejected), not left on the
-   * face; so does the slip-stick's */
-  double below = -1e-3 * dmax;
   memset(fc, 0, sizeof *fc);
   fc->ran = 1;
   fc->n_phases = n;
@@ -257,8 +255,120 @@ static void certify_family(collect *c, int f, double dmax, double seconds,
   fc->x1_hi = m->d0[0] + L;
   fc->v1_lo = -L;
   fc->v1_hi = L;
-  double lo[4] = {tlo, n == 3 ? tlo : below, fc->x1_lo, fc->v1_lo};
-  double hi[4] = {dmax, dmax, fc->x1_hi, fc->v1_hi};
+  lo[0] = tlo;
+  lo[1] = n == 3 ? tlo : below;
+  lo[2] = fc->x1_lo;
+  lo[3] = fc->v1_lo;
+  hi[0] = dmax;
+  hi[1] = dmax;
+  hi[2] = fc->x1_hi;
+  hi[3] = fc->v1_hi;
+}
+
+/* Root q of family f's proof: an orbit (counted; solved and added if the
+ * search missed it) or not one.  Clears *complete, and says why, when it
+ * could not be judged or added. */
+static void cert_judge_root(collect *c, int f, const ss__cert_root *q,
+                            ss_family_cert *fc, int *complete) {
+  const ss_model *m = c->m;
+  const ss_params *p = &m->p;
+  const ss_mode *seq = FAMILY_SEQ[f];
+  int n = 2 + f;
+  double u[4], tau[3], st;
+  ss__cert_polish(m, n, q, u);
+  ss__cert_point(m, n, u, NULL, &st);
+  tau[0] = u[0];
+  tau[1] = u[1];
+  tau[2] = st;
+  int positive = 1;
+  for (int k = 0; k < n; k++)
+    positive = positive && tau[k] > 0;
+  if (!positive) {
+    fc->rejected++;
+    return;
+  }
+  ss_orbit o;
+  memset(&o, 0, sizeof o);
+  o.kind = f ? SS_ORBIT_OVERSHOOT : SS_ORBIT_STICKSLIP;
+  o.n_phases = n;
+  memcpy(o.modes, seq, sizeof o.modes[0] * (size_t)n);
+  memcpy(o.durations, tau, sizeof tau[0] * (size_t)n);
+  double x0[4] = {u[2], u[2] + p->ur / p->chi, u[3], p->V};
+  ss_x_to_z(m, x0, o.z0);
+  ss_diag dd;
+  ss_diag_clear(&dd);
+  int ck = ss_orbit_check(m, &o, &dd);
+  if (ck == SS_INFEASIBLE) {
+    fc->rejected++;
+    return;
+  }
+  if (ck != SS_OK) {
+    *complete = 0;
+    snprintf(fc->why, sizeof fc->why,
+             "the root at durations %.9g, %.9g could not be checked: %.96s",
+             tau[0], tau[1], dd.text);
+    return;
+  }
+  fc->orbits++;
+  if (known_period1(c, f, tau))
+    return;
+  int before = c->n, trunc = c->rep->truncated;
+  try_solve(c, n, seq, tau, SS_SOURCE_CERTIFICATE);
+  if (c->n > before) {
+    fc->added++;
+  } else if (c->rep->truncated > trunc) {
+    *complete = 0;
+    snprintf(fc->why, sizeof fc->why, "more orbits than room in the answer");
+  } else {
+    *complete = 0;
+    snprintf(fc->why, sizeof fc->why,
+             "the orbit proved at durations %.9g, %.9g did not solve "
+             "again",
+             tau[0], tau[1]);
+  }
+}
+
+/* Every orbit of family f the search returned inside the box of fc (least
+ * slip and overshoot tlo, longest phase dmax) is among the proof's roots;
+ * clears *complete, and says why, if one is not. */
+static void cert_returned_in_roots(const collect *c, int f,
+                                   const ss__certificate *ce, double tlo,
+                                   double dmax, ss_family_cert *fc,
+                                   int *complete) {
+  int n = 2 + f;
+  for (int i = 0; i < c->n; i++) {
+    const ss_orbit *b = &c->out[i];
+    if (b->n_phases != n || b->n_turns != 1 || b->modes[1] != FAMILY_SEQ[f][1])
+      continue;
+    double u[4] = {b->durations[0], b->durations[1], b->x0[0], b->x0[2]};
+    int inside = u[0] >= tlo && u[0] <= dmax && u[1] <= dmax &&
+                 (n == 2 || u[1] >= tlo) && b->durations[n - 1] <= dmax &&
+                 u[2] >= fc->x1_lo && u[2] <= fc->x1_hi && u[3] >= fc->v1_lo &&
+                 u[3] <= fc->v1_hi;
+    int found = 0;
+    for (int r = 0; r < ce->n_roots && !found; r++)
+      found = in_root(&ce->roots[r], u);
+    if (inside && !found) {
+      *complete = 0;
+      snprintf(fc->why, sizeof fc->why,
+               "the orbit at durations %.9g, %.9g is not among the proved "
+               "roots",
+               u[0], u[1]);
+    }
+  }
+}
+
+static void certify_family(collect *c, int f, double dmax, double seconds,
+                           ss_family_cert *fc) {
+  const ss_model *m = c->m;
+  int n = 2 + f;
+  double tlo = CERT_SLIP_MIN * SS_TWO_PI / m->w[1];
+  /* the stick reaches a little below zero, so that a root with a stick of
+   * length zero lies inside and is proved (and rejected), not left on the
+   * face; so does the slip-stick's */
+  double below = -1e-3 * dmax;
+  double lo[4], hi[4];
+  cert_box(m, f, dmax, tlo, below, fc, lo, hi);
   double t0 = ss__now();
   cert_cls cc = {c, t0 + seconds};
   ss__certificate ce;
@@ -284,83 +394,10 @@ static void certify_family(collect *c, int f, double dmax, double seconds,
              "[%.9g, %.9g] (a double root, or one on the box's face)",
              ce.n_undecided, ce.undecided.lo[0], ce.undecided.hi[0],
              ce.undecided.lo[1], ce.undecided.hi[1]);
-  /* each root: an orbit, returned, or not one */
-  for (int r = 0; r < ce.n_roots; r++) {
-    const ss__cert_root *q = &ce.roots[r];
-    double u[4], tau[3], st;
-    ss__cert_polish(m, n, q, u);
-    ss__cert_point(m, n, u, NULL, &st);
-    tau[0] = u[0];
-    tau[1] = u[1];
-    tau[2] = st;
-    int positive = 1;
-    for (int k = 0; k < n; k++)
-      positive = positive && tau[k] > 0;
-    if (!positive) {
-      fc->rejected++;
-      continue;
-    }
-    ss_orbit o;
-    memset(&o, 0, sizeof o);
-    o.kind = f ? SS_ORBIT_OVERSHOOT : SS_ORBIT_STICKSLIP;
-    o.n_phases = n;
-    memcpy(o.modes, seq, sizeof o.modes[0] * (size_t)n);
-    memcpy(o.durations, tau, sizeof tau[0] * (size_t)n);
-    double x0[4] = {u[2], u[2] + p->ur / p->chi, u[3], p->V};
-    ss_x_to_z(m, x0, o.z0);
-    ss_diag dd;
-    ss_diag_clear(&dd);
-    int ck = ss_orbit_check(m, &o, &dd);
-    if (ck == SS_INFEASIBLE) {
-      fc->rejected++;
-      continue;
-    }
-    if (ck != SS_OK) {
-      complete = 0;
-      snprintf(fc->why, sizeof fc->why,
-               "the root at durations %.9g, %.9g could not be checked: %.96s",
-               tau[0], tau[1], dd.text);
-      continue;
-    }
-    fc->orbits++;
-    if (known_period1(c, f, tau))
-      continue;
-    int before = c->n, trunc = c->rep->truncated;
-    try_solve(c, n, seq, tau, SS_SOURCE_CERTIFICATE);
-    if (c->n > before) {
-      fc->added++;
-    } else if (c->rep->truncated > trunc) {
-      complete = 0;
-      snprintf(fc->why, sizeof fc->why, "more orbits than room in the answer");
-    } else {
-      complete = 0;
-      snprintf(fc->why, sizeof fc->why,
-               "the orbit proved at durations %.9g, %.9g did not solve "
-               "again",
-               tau[0], tau[1]);
-    }
-  }
-  /* every orbit of the family returned, inside the box, is a root */
-  for (int i = 0; i < c->n && ce.complete; i++) {
-    const ss_orbit *b = &c->out[i];
-    if (b->n_phases != n || b->n_turns != 1 || b->modes[1] != seq[1])
-      continue;
-    double u[4] = {b->durations[0], b->durations[1], b->x0[0], b->x0[2]};
-    int inside = u[0] >= tlo && u[0] <= dmax && u[1] <= dmax &&
-                 (n == 2 || u[1] >= tlo) && b->durations[n - 1] <= dmax &&
-                 u[2] >= fc->x1_lo && u[2] <= fc->x1_hi && u[3] >= fc->v1_lo &&
-                 u[3] <= fc->v1_hi;
-    int found = 0;
-    for (int r = 0; r < ce.n_roots && !found; r++)
-      found = in_root(&ce.roots[r], u);
-    if (inside && !found) {
-      complete = 0;
-      snprintf(fc->why, sizeof fc->why,
-               "the orbit at durations %.9g, %.9g is not among the proved "
-               "roots",
-               u[0], u[1]);
-    }
-  }
+  for (int r = 0; r < ce.n_roots; r++)
+    cert_judge_root(c, f, &ce.roots[r], fc, &complete);
+  if (ce.complete)
+    cert_returned_in_roots(c, f, &ce, tlo, dmax, fc, &complete);
   fc->complete = complete;
   ss__certificate_free(&ce);
   fc->seconds = ss__now() - t0;
@@ -510,12 +547,259 @@ static void from_simulation(collect *c, const double seed[2], int max_k) {
   }
 }
 
+/* The sequence of a guess of n phases: its own modes, or, when they do not
+ * start with slip and end with stick, the default sequence of that length
+ * (slip-stick, slip-overshoot-stick). */
+static int guess_sequence(const ss_orbit_opts *opts, ss_mode *modes,
+                          ss_diag *d) {
+  int n = opts->n_guess;
+  if (n > SS_MAX_PHASES)
+    return ss__fail(d, SS_EINVAL, "guess", n, "too many phases");
+  memcpy(modes, opts->guess_modes, sizeof opts->guess_modes);
+  if (modes[0] != SS_MODE_SLIP || modes[n - 1] != SS_MODE_STICK) {
+    if (n != 2 && n != 3)
+      return ss__fail(d, SS_EINVAL, "guess", n,
+                      "give the modes of a guess with more than 3 phases");
+    memcpy(modes, FAMILY_SEQ[n - 2], sizeof modes[0] * (size_t)n);
+  }
+  return SS_OK;
+}
+
+/* The search from the caller's guess alone: its root, if it solves and is
+ * feasible (a guess that goes round a shorter orbit k times finds that
+ * orbit), or the reason it is not one.  A guess that does not converge, or
+ * is infeasible or singular, is an answer with no orbit, not a failure. */
+static int from_guess(collect *c, const ss_orbit_opts *opts, ss_diag *d) {
+  ss_orbit_report *rep = c->rep;
+  ss_mode modes[SS_MAX_PHASES];
+  int rc = guess_sequence(opts, modes, d);
+  if (rc)
+    return rc;
+  ss_diag dd;
+  ss_orbit o;
+  ss_diag_clear(&dd);
+  rep->newton_starts = 1;
+  ss_stab_opts so = {0, opts->difference_check};
+  rc = ss_orbit_solve(c->m, opts->n_guess, modes, opts->guess, &so, &o, &dd);
+  if (rc == SS_OK) {
+    rep->roots = 1;
+    o.source = SS_SOURCE_GUESS;
+    if (to_minimal(c->m, &o, &so) < 0)
+      rep->duplicates = 1;
+    else if (c->n < c->max)
+      c->out[c->n++] = o;
+    else
+      rep->truncated = 1;
+    return SS_OK;
+  }
+  snprintf(rep->reason, sizeof rep->reason, "%s", dd.text);
+  if (rc == SS_INFEASIBLE) {
+    rep->roots = 1;
+    rep->infeasible = 1;
+    rep->has_rejected = 1;
+    rep->rejected = o;
+  }
+  if (rc != SS_INFEASIBLE && rc != SS_ENOCONV && rc != SS_ESINGULAR)
+    return ss__fail(d, rc, dd.where, dd.value, "%s", dd.text);
+  return SS_OK;
+}
+
+/* The seeds on Sigma0, a grid in (z1, z1') on the scales of the stick's
+ * reach and of V, finer with the effort.  The first of them, the number
+ * returned (a smaller grid), start simulations; Newton on P^k starts from
+ * all *ns.  The period-1 orbits of the two families come from the scan,
+ * stable or not; simulations are for the attractors of other sequences and
+ * periods. */
+static int make_seeds(const collect *c, int effort, double seeds[MAX_SEEDS][2],
+                      int *ns) {
+  const ss_params *p = &c->m->p;
+  double L = (p->ur - p->us) / p->chi, V = p->V;
+  const double z1f[] = {0, 0.5, -0.5, 1.0, -1.0, 1.5, -1.5};
+  const double vf[] = {-0.8, 0.8, 0.0, -1.6, 1.6, -2.4};
+  int nz = effort == 1 ? 3 : 7, nv = effort == 1 ? 2 : 6;
+  int nz_sim = effort == 1 || effort == 2 ? 3 : 7;
+  int nv_sim = effort == 1 ? 2 : effort == 2 ? 4 : 6;
+  *ns = 0;
+  for (int pass = 0; pass < 2; pass++)
+    for (int i = 0; i < nz; i++)
+      for (int j = 0; j < nv; j++) {
+        int in_sim = i < nz_sim && j < nv_sim;
+        if (in_sim != (pass == 0))
+          continue;
+        seeds[*ns][0] = z1f[i] * L;
+        seeds[*ns][1] = vf[j] * V;
+        (*ns)++;
+      }
+  return nz_sim * nv_sim;
+}
+
+/* Source 1 from each of the first ns_sim seeds. */
+static void from_simulations(collect *c, double seeds[][2], int ns_sim,
+                             int max_k) {
+  for (int i = 0; i < ns_sim && !over_budget(c); i++)
+    from_simulation(c, seeds[i], max_k);
+}
+
+/* Source 2 for family f: every root of its period-1 duration equations in
+ * the box dmax, from the scan (scan.c) at step h, solved unless found
+ * already; when none of the family is feasible, its closest rejected roots
+ * solved too, to say why in numbers (the report keeps the closest to
+ * feasible). */
+static int scan_family(collect *c, int f, double dmax, double h, ss_diag *d) {
+  ss_orbit_report *rep = c->rep;
+  double roots[SCAN_MAX_ROOTS][3], rejected[2][3];
+  int nr = 0, n_rejected = 0, before = c->n;
+  int rc = ss__scan_period1(c->m, 2 + f, dmax, h, roots, SCAN_MAX_ROOTS, &nr,
+                            rejected, &n_rejected, &rep->newton_starts,
+                            &rep->scan_cells, &rep->scan_step, scan_stop, c);
+  rep->scan_box = dmax;
+  if (rc == SS_ENOMEM)
+    return ss__fail(d, rc, "", 0, "out of memory in the orbit search");
+  for (int r = 0; r < nr && !over_budget(c); r++) {
+    /* one the simulations found already needs no solve */
+    if (known_period1(c, f, roots[r]))
+      rep->duplicates++;
+    else
+      try_solve(c, 2 + f, FAMILY_SEQ[f], roots[r], SS_SOURCE_DURATION_GRID);
+  }
+  for (int r = 0; r < n_rejected && c->n == before && !over_budget(c); r++)
+    try_solve(c, 2 + f, FAMILY_SEQ[f], rejected[r], SS_SOURCE_DURATION_GRID);
+  return SS_OK;
+}
+
+/* Source 2: every root of the period-1 duration equations of the two
+ * families asked for, with each duration within 1.5 slow modal periods,
+ * from a scan of the equations reduced to two durations at a step of 0.3
+ * rad of the fastest motion (the fast mode, or x1 under stick). */
+static int from_scan(collect *c, unsigned kinds, int effort, ss_diag *d) {
+  const ss_model *m = c->m;
+  double dmax = family_box(m);
+  double h = (effort == 1   ? 0.5
+              : effort == 2 ? 0.3
+                            : 0.15) /
+             fmax(m->w[1], 1.0);
+  for (int f = 0; f < 2; f++) {
+    if (!(kinds & FAMILY_KIND[f]) || over_budget(c))
+      continue;
+    int rc = scan_family(c, f, dmax, h, d);
+    if (rc)
+      return rc;
+  }
+  return SS_OK;
+}
+
+/* Whether the fixed point s of P^k is one of no P^j, j | k, j < k. */
+static int minimal_period(const collect *c, const double s[2], int k) {
+  double o1[2];
+  for (int j = 1; j < k; j++)
+    if (k % j == 0 &&
+        ss_poincare(c->m, s, j, MAP_EVENTS * (size_t)j, o1, NULL, NULL, NULL) ==
+            0 &&
+        fabs(o1[0] - s[0]) + fabs(o1[1] - s[1]) < 1e-8 * c->scale)
+      return 0;
+  return 1;
+}
+
+/* Source 3: Newton on P^k from each seed, k up to kmax; a fixed point of
+ * P^k that is one of P^j, j | k, is not new. */
+static void from_map_newton(collect *c, double seeds[][2], int ns, int kmax) {
+  for (int k = 1; k <= kmax; k++)
+    for (int i = 0; i < ns && !over_budget(c); i++) {
+      double s[2] = {seeds[i][0], seeds[i][1]}, dur[SS_MAX_PHASES];
+      ss_mode modes[SS_MAX_PHASES];
+      int n;
+      c->rep->newton_starts++;
+      if (map_newton(c, s, k, modes, dur, &n) == 0 && minimal_period(c, s, k))
+        try_solve(c, n, modes, dur, SS_SOURCE_MAP_NEWTON);
+    }
+}
+
+/* The proof that nothing of the two period-1 families asked for is missing,
+ * each within the search's own budget: a share of what is left of it, a
+ * tenth kept for the rest. */
+static void certify_families(collect *c, unsigned kinds,
+                             const ss_orbit_opts *opts) {
+  ss_orbit_report *rep = c->rep;
+  double dmax = family_box(c->m);
+  double secs = opts->certify_seconds > 0 ? opts->certify_seconds : 10;
+  int left = !!(kinds & FAMILY_KIND[0]) + !!(kinds & FAMILY_KIND[1]);
+  for (int f = 0; f < 2; f++) {
+    if (!(kinds & FAMILY_KIND[f]) || over_budget(c))
+      continue;
+    double s = secs;
+    if (c->budget > 0) {
+      double rest = 0.9 * c->budget - (ss__now() - c->t_start);
+      s = fmin(s, rest / left);
+    }
+    if (s > 0) {
+      certify_family(c, f, dmax, s, &rep->cert[f]);
+    } else {
+      memset(&rep->cert[f], 0, sizeof rep->cert[f]);
+      rep->cert[f].ran = 1;
+      snprintf(rep->cert[f].why, sizeof rep->cert[f].why,
+               "no time left for the proof in the search's budget");
+    }
+    left--;
+  }
+}
+
+/* Only the kinds asked for, sorted by kind, then period (stable: the order
+ * found among equals). */
+static void keep_and_sort(collect *c, unsigned kinds) {
+  int w = 0;
+  for (int i = 0; i < c->n; i++)
+    if (kinds & c->out[i].kind)
+      c->out[w++] = c->out[i];
+  c->n = w;
+  for (int i = 1; i < c->n; i++)
+    for (int j = i; j > 0; j--) {
+      ss_orbit *a = &c->out[j - 1], *b = &c->out[j];
+      if (a->kind > b->kind || (a->kind == b->kind && a->period > b->period)) {
+        ss_orbit t = *a;
+        *a = *b;
+        *b = t;
+      }
+    }
+}
+
+/* The finite-difference check of the Jacobian, for the orbits returned. */
+static void difference_checks(collect *c) {
+  for (int i = 0; i < c->n; i++) {
+    ss_orbit *q = &c->out[i];
+    ss_stab_opts so = {q->n_turns, 1};
+    ss_stability(c->m, q->n_phases, q->modes, q->durations, q->z0, &so,
+                 &q->stab);
+  }
+}
+
+/* The search's status: why nothing was found, if so and not said yet; a
+ * cancellation or a spent budget. */
+static int search_status(collect *c, ss_diag *d) {
+  ss_orbit_report *rep = c->rep;
+  if (c->n == 0 && !rep->reason[0])
+    snprintf(rep->reason, sizeof rep->reason,
+             "no periodic orbit found: %d Newton starts gave %d roots, none "
+             "feasible; %d simulations did not settle on a periodic motion",
+             rep->newton_starts, rep->roots, rep->simulations);
+  if (over_budget(c) && c->stopped == SS_ECANCELED)
+    return ss__fail(d, SS_ECANCELED, "", 0,
+                    "the orbit search was cancelled after finding %d orbits",
+                    c->n);
+  if (c->stopped)
+    return ss__fail(d, SS_ELIMIT_TIME, "max_seconds", c->budget,
+                    "the orbit search ran out of its %g s budget after "
+                    "finding %d orbits",
+                    c->budget, c->n);
+  return SS_OK;
+}
+
 int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
                   int max_out, int *n_out, ss_orbit_report *rep, ss_diag *d) {
   ss_orbit_opts def = {0};
   ss_orbit_report rep_local;
   const ss_params *p = &m->p;
   collect c;
+  int rc;
   if (!opts)
     opts = &def;
   if (!rep)
@@ -531,222 +815,35 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
   if (max_k < 1 || max_k > 8)
     return ss__fail(d, SS_EINVAL, "max_period", max_k,
                     "max_period is between 1 and 8");
+  memset(&c, 0, sizeof c);
   c.m = m;
   c.out = out;
   c.max = max_out;
-  c.n = 0;
   c.scale = fmax(p->V, (p->ur - p->us) / p->chi);
   c.rep = rep;
   c.t_start = ss__now();
   c.budget = opts->max_seconds;
   c.cancelled = opts->cancelled;
   c.cancel_cls = opts->cancel_cls;
-  c.stopped = 0;
-  c.n_known = c.n_seen = 0;
   *n_out = 0;
-
   if (opts->n_guess > 0) {
-    ss_mode modes[SS_MAX_PHASES];
-    int n = opts->n_guess;
-    if (n > SS_MAX_PHASES)
-      return ss__fail(d, SS_EINVAL, "guess", n, "too many phases");
-    memcpy(modes, opts->guess_modes, sizeof modes);
-    if (modes[0] != SS_MODE_SLIP || modes[n - 1] != SS_MODE_STICK) {
-      /* default sequences by length */
-      ss_mode ov[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
-      ss_mode ss[2] = {SS_MODE_SLIP, SS_MODE_STICK};
-      if (n == 3)
-        memcpy(modes, ov, sizeof ov);
-      else if (n == 2)
-        memcpy(modes, ss, sizeof ss);
-      else
-        return ss__fail(d, SS_EINVAL, "guess", n,
-                        "give the modes of a guess with more than 3 phases");
-    }
-    ss_diag dd;
-    ss_orbit o;
-    ss_diag_clear(&dd);
-    rep->newton_starts = 1;
-    ss_stab_opts so = {0, opts->difference_check};
-    int rc = ss_orbit_solve(m, n, modes, opts->guess, &so, &o, &dd);
-    if (rc == SS_OK) {
-      rep->roots = 1;
-      o.source = SS_SOURCE_GUESS;
-      /* a guess that goes round a shorter orbit k times finds that orbit */
-      if (to_minimal(m, &o, &so) < 0)
-        rep->duplicates = 1;
-      else if (c.n < c.max)
-        c.out[c.n++] = o;
-      else
-        rep->truncated = 1;
-    } else {
-      snprintf(rep->reason, sizeof rep->reason, "%s", dd.text);
-      if (rc == SS_INFEASIBLE) {
-        rep->roots = 1;
-        rep->infeasible = 1;
-        rep->has_rejected = 1;
-        rep->rejected = o;
-      }
-      if (rc != SS_INFEASIBLE && rc != SS_ENOCONV && rc != SS_ESINGULAR)
-        return ss__fail(d, rc, dd.where, dd.value, "%s", dd.text);
-    }
-    *n_out = c.n;
-    return SS_OK;
+    if ((rc = from_guess(&c, opts, d)) == SS_OK)
+      *n_out = c.n;
+    return rc;
   }
-
-  /* seeds on Sigma0 */
-  double L = (p->ur - p->us) / p->chi, V = p->V;
-  double seeds[42][2];
-  int ns = 0, ns_sim;
-  {
-    const double z1f[] = {0, 0.5, -0.5, 1.0, -1.0, 1.5, -1.5};
-    const double vf[] = {-0.8, 0.8, 0.0, -1.6, 1.6, -2.4};
-    /* the first ns_sim of them (a smaller grid) start simulations; Newton
-     * on P^k starts from all.  The period-1 orbits of the two families
-     * come from the scan below, stable or not; simulations are for the
-     * attractors of other sequences and periods */
-    int nz = effort == 1 ? 3 : 7, nv = effort == 1 ? 2 : 6;
-    int nz_sim = effort == 1 || effort == 2 ? 3 : 7;
-    int nv_sim = effort == 1 ? 2 : effort == 2 ? 4 : 6;
-    for (int pass = 0; pass < 2; pass++)
-      for (int i = 0; i < nz; i++)
-        for (int j = 0; j < nv; j++) {
-          int in_sim = i < nz_sim && j < nv_sim;
-          if (in_sim != (pass == 0))
-            continue;
-          seeds[ns][0] = z1f[i] * L;
-          seeds[ns][1] = vf[j] * V;
-          ns++;
-        }
-    ns_sim = nz_sim * nv_sim;
-  }
-  /* 1. simulation to attractors */
-  for (int i = 0; i < ns_sim && !over_budget(&c); i++)
-    from_simulation(&c, seeds[i], max_k);
-
-  /* 2. every root of the period-1 duration equations of the two families
-   * with each duration within 1.5 slow modal periods, from a scan of the
-   * equations reduced to two durations (scan.c) at a step of 0.3 rad of the
-   * fastest motion (the fast mode, or x1 under stick) */
-  {
-    double dmax = family_box(m);
-    double h = (effort == 1   ? 0.5
-                : effort == 2 ? 0.3
-                              : 0.15) /
-               fmax(m->w[1], 1.0);
-    for (int f = 0; f < 2; f++) {
-      if (!(kinds & FAMILY_KIND[f]) || over_budget(&c))
-        continue;
-      double roots[SCAN_MAX_ROOTS][3], rejected[2][3];
-      int nr = 0, n_rejected = 0, before = c.n;
-      int rc =
-          ss__scan_period1(m, 2 + f, dmax, h, roots, SCAN_MAX_ROOTS, &nr,
-                           rejected, &n_rejected, &rep->newton_starts,
-                           &rep->scan_cells, &rep->scan_step, scan_stop, &c);
-      rep->scan_box = dmax;
-      if (rc == SS_ENOMEM)
-        return ss__fail(d, rc, "", 0, "out of memory in the orbit search");
-      for (int r = 0; r < nr && !over_budget(&c); r++) {
-        /* one the simulations found already needs no solve */
-        if (known_period1(&c, f, roots[r]))
-          rep->duplicates++;
-        else
-          try_solve(&c, 2 + f, FAMILY_SEQ[f], roots[r],
-                    SS_SOURCE_DURATION_GRID);
-      }
-      /* none of the family: its closest rejected roots say why, in
-       * numbers (the report keeps the closest to feasible) */
-      for (int r = 0; r < n_rejected && c.n == before && !over_budget(&c); r++)
-        try_solve(&c, 2 + f, FAMILY_SEQ[f], rejected[r],
-                  SS_SOURCE_DURATION_GRID);
-    }
-  }
-  /* 3. Newton on P^k from the seeds */
-  if ((kinds & SS_ORBIT_OTHER) && effort >= 2) {
-    int kmax = effort == 2 ? (max_k < 2 ? max_k : 2) : max_k;
-    for (int k = 1; k <= kmax; k++)
-      for (int i = 0; i < ns && !over_budget(&c); i++) {
-        double s[2] = {seeds[i][0], seeds[i][1]}, dur[SS_MAX_PHASES];
-        ss_mode modes[SS_MAX_PHASES];
-        int n;
-        c.rep->newton_starts++;
-        if (map_newton(&c, s, k, modes, dur, &n) == 0) {
-          /* a fixed point of P^k that is one of P^j, j | k, is not new */
-          double o1[2];
-          int minimal = 1;
-          for (int j = 1; j < k && minimal; j++)
-            if (k % j == 0 &&
-                ss_poincare(m, s, j, MAP_EVENTS * (size_t)j, o1, NULL, NULL,
-                            NULL) == 0 &&
-                fabs(o1[0] - s[0]) + fabs(o1[1] - s[1]) < 1e-8 * c.scale)
-              minimal = 0;
-          if (minimal)
-            try_solve(&c, n, modes, dur, SS_SOURCE_MAP_NEWTON);
-        }
-      }
-  }
-  /* 4. the proof that nothing of the two period-1 families is missing */
-  if (opts->certify) {
-    double dmax = family_box(m);
-    double secs = opts->certify_seconds > 0 ? opts->certify_seconds : 10;
-    int left = !!(kinds & FAMILY_KIND[0]) + !!(kinds & FAMILY_KIND[1]);
-    for (int f = 0; f < 2; f++) {
-      if (!(kinds & FAMILY_KIND[f]) || over_budget(&c))
-        continue;
-      /* within the search's own budget: a share of what is left of it, a
-       * tenth kept for the rest */
-      double s = secs;
-      if (c.budget > 0) {
-        double rest = 0.9 * c.budget - (ss__now() - c.t_start);
-        s = fmin(s, rest / left);
-      }
-      if (s > 0) {
-        certify_family(&c, f, dmax, s, &rep->cert[f]);
-      } else {
-        memset(&rep->cert[f], 0, sizeof rep->cert[f]);
-        rep->cert[f].ran = 1;
-        snprintf(rep->cert[f].why, sizeof rep->cert[f].why,
-                 "no time left for the proof in the search's budget");
-      }
-      left--;
-    }
-  }
-  /* keep only the kinds asked for */
-  int w = 0;
-  for (int i = 0; i < c.n; i++)
-    if (kinds & c.out[i].kind)
-      c.out[w++] = c.out[i];
-  c.n = w;
-  /* sort: kind, then period */
-  for (int i = 1; i < c.n; i++)
-    for (int j = i; j > 0; j--) {
-      ss_orbit *a = &c.out[j - 1], *b = &c.out[j];
-      if (a->kind > b->kind || (a->kind == b->kind && a->period > b->period)) {
-        ss_orbit t = *a;
-        *a = *b;
-        *b = t;
-      }
-    }
-  /* the finite-difference check of the Jacobian, for the orbits returned */
-  for (int i = 0; i < c.n && opts->difference_check; i++) {
-    ss_orbit *q = &c.out[i];
-    ss_stab_opts so = {q->n_turns, 1};
-    ss_stability(m, q->n_phases, q->modes, q->durations, q->z0, &so, &q->stab);
-  }
+  double seeds[MAX_SEEDS][2];
+  int ns, ns_sim = make_seeds(&c, effort, seeds, &ns);
+  from_simulations(&c, seeds, ns_sim, max_k);
+  if ((rc = from_scan(&c, kinds, effort, d)))
+    return rc;
+  if ((kinds & SS_ORBIT_OTHER) && effort >= 2)
+    from_map_newton(&c, seeds, ns,
+                    effort == 2 ? (max_k < 2 ? max_k : 2) : max_k);
+  if (opts->certify)
+    certify_families(&c, kinds, opts);
+  keep_and_sort(&c, kinds);
+  if (opts->difference_check)
+    difference_checks(&c);
   *n_out = c.n;
-  if (c.n == 0 && !rep->reason[0])
-    snprintf(rep->reason, sizeof rep->reason,
-             "no periodic orbit found: %d Newton starts gave %d roots, none "
-             "feasible; %d simulations did not settle on a periodic motion",
-             rep->newton_starts, rep->roots, rep->simulations);
-  if (over_budget(&c) && c.stopped == SS_ECANCELED)
-    return ss__fail(d, SS_ECANCELED, "", 0,
-                    "the orbit search was cancelled after finding %d orbits",
-                    c.n);
-  if (c.stopped)
-    return ss__fail(d, SS_ELIMIT_TIME, "max_seconds", c.budget,
-                    "the orbit search ran out of its %g s budget after "
-                    "finding %d orbits",
-                    c.budget, c.n);
-  return SS_OK;
+  return search_status(&c, d);
 }

@@ -552,6 +552,40 @@ static int sampled(const sampler *sp, ss_diag *d) {
   return SS_OK;
 }
 
+/* The samples of the run up to t_until (strict: before it), at the given
+ * times, then adaptive ones; SS_OK, or why the sampling stopped. */
+static int sample_until(sampler *sp, const ss_sim *s, double t_until,
+                        int strict, ss_diag *d) {
+  emit_samples(sp, s, t_until, strict);
+  if (!sp->adaptive)
+    return SS_OK;
+  sample_window(sp, s, t_until);
+  return sampled(sp, d);
+}
+
+/* The sampler of a run of ns samples at given times (their room in r), or
+ * of adaptive ones, measured in the coordinates asked for. */
+static int sampler_start(sampler *sp, const ss_sim_opts *o, size_t ns,
+                         ss_sim_result *r, ss_diag *d) {
+  if (ns) {
+    r->st = malloc(ns * sizeof *r->st);
+    r->sx = malloc(4 * ns * sizeof *r->sx);
+    r->smode = malloc(ns);
+    if (!r->st || !r->sx || !r->smode)
+      return ss__fail(d, SS_ENOMEM, "samples", (double)ns, "out of memory");
+  }
+  r->n_samples = ns;
+  memset(sp, 0, sizeof *sp);
+  sp->o = o;
+  sp->n = ns;
+  sp->r = r;
+  sp->adaptive = o->sample_tolerance > 0;
+  for (int i = 0; i < 4; i++)
+    if (!o->sample_axes || (o->sample_axes & (1u << i)))
+      sp->inv_scale[i] = o->sample_scale[i] > 0 ? 1 / o->sample_scale[i] : 1;
+  return SS_OK;
+}
+
 static int check_opts(const ss_sim_opts *o, size_t *n_samples, ss_diag *d) {
   if (!isfinite(o->t0))
     return ss__fail(d, SS_EINVAL, "t0", o->t0, "t0 must be finite");
@@ -651,24 +685,8 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
                 : ss__sim_init(&s, m, o->t0, x0, d)))
     return rc;
   s.full_search = o->full_search != 0;
-  if (ns) {
-    r->st = malloc(ns * sizeof *r->st);
-    r->sx = malloc(4 * ns * sizeof *r->sx);
-    r->smode = malloc(ns);
-    if (!r->st || !r->sx || !r->smode) {
-      rc = ss__fail(d, SS_ENOMEM, "samples", (double)ns, "out of memory");
-      goto fail;
-    }
-  }
-  r->n_samples = ns;
-  memset(&sp, 0, sizeof sp);
-  sp.o = o;
-  sp.n = ns;
-  sp.r = r;
-  sp.adaptive = o->sample_tolerance > 0;
-  for (int i = 0; i < 4; i++)
-    if (!o->sample_axes || (o->sample_axes & (1u << i)))
-      sp.inv_scale[i] = o->sample_scale[i] > 0 ? 1 / o->sample_scale[i] : 1;
+  if ((rc = sampler_start(&sp, o, ns, r, d)))
+    goto fail;
   if (o->max_seconds > 0)
     t_start = ss__now();
   for (;;) {
@@ -692,13 +710,8 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
       goto partial;
     /* samples of this phase, strictly before the event (or, placed for a
      * curve, up to it) */
-    if (sp.i < sp.n)
-      emit_samples(&sp, &s, abs_time(&s, tau), 1);
-    if (sp.adaptive) {
-      sample_window(&sp, &s, abs_time(&s, tau));
-      if ((rc = sampled(&sp, d)))
-        goto stopped;
-    }
+    if ((rc = sample_until(&sp, &s, abs_time(&s, tau), 1, d)))
+      goto stopped;
     ss_event ev;
     sim_commit(&s, &ev);
     if (ev.kind == SS_EVENT_GRAZING)
@@ -712,24 +725,16 @@ int ss_simulate(const ss_model *m, const double x0[4], const ss_sim_opts *o,
       r->t = ev.t;
       r->mode = s.mode;
       memcpy(r->x, ev.x, sizeof ev.x);
-      if (sp.i < sp.n)
-        emit_samples(&sp, &s, ev.t, 0);
-      if (sp.adaptive) {
-        sample_window(&sp, &s, ev.t);
-        if ((rc = sampled(&sp, d)))
-          goto stopped;
-      }
+      if ((rc = sample_until(&sp, &s, ev.t, 0, d)))
+        goto stopped;
       r->n_samples = sp.i;
       return SS_OK;
     }
   }
-  emit_samples(&sp, &s, o->t_end, 0);
-  if (sp.adaptive) {
-    sample_window(&sp, &s, o->t_end);
-    if ((rc = sampled(&sp, d)))
-      goto stopped;
+  if ((rc = sample_until(&sp, &s, o->t_end, 0, d)))
+    goto stopped;
+  if (sp.adaptive)
     r->n_samples = sp.i;
-  }
   r->t = o->t_end;
   r->mode = s.mode;
   r->perpetual = s.perpetual;

@@ -105,15 +105,16 @@ static int count_turns(int n, const ss_mode *modes) {
   return turns;
 }
 
-int ss_stability(const ss_model *m, int n, const ss_mode *modes,
-                 const double *tau, const double z0[4],
-                 const ss_stab_opts *opts, ss_stab *st) {
+/* The analytic Jacobian of the map on Sigma0, in (z1, z1'): the product of
+ * the phases' maps with the switching-time corrections of the file's head,
+ * carried as the 4 x 2 matrix D of dZ against (x, v).  SS_ESINGULAR when a
+ * phase ends tangentially (n.f = 0: no correction exists); jac is then
+ * untouched. */
+static int map_jacobian(const ss_model *m, int n, const ss_mode *modes,
+                        const double *tau, const double z0[4],
+                        double jac[2][2]) {
   double D[4][2] = {{1, 0}, {1, 0}, {0, 1}, {0, 0}}, Z[4];
-  if (!m || !modes || !tau || !z0 || n < 1 || n > SS_MAX_PHASES || !st)
-    return SS_EINVAL;
   double chi = m->p.chi;
-  int turns = opts && opts->turns > 0 ? opts->turns : count_turns(n, modes);
-  memset(st, 0, sizeof *st);
   memcpy(Z, z0, sizeof Z);
   for (int k = 0; k < n; k++) {
     double A[16], c[4], dA[16], dc[4], f[4], Ze[4], AD[4][2], nv[4] = {0};
@@ -148,61 +149,76 @@ int ss_stability(const ss_model *m, int n, const ss_mode *modes,
     }
     memcpy(Z, Ze, sizeof Z);
   }
-  st->jac[0][0] = D[0][0];
-  st->jac[0][1] = D[0][1];
-  st->jac[1][0] = D[2][0];
-  st->jac[1][1] = D[2][1];
+  jac[0][0] = D[0][0];
+  jac[0][1] = D[0][1];
+  jac[1][0] = D[2][0];
+  jac[1][1] = D[2][1];
+  return SS_OK;
+}
+
+/* The multipliers of st->jac and the verdicts read from them. */
+static void set_multipliers(ss_stab *st) {
   eig2(st->jac, st->eig_re, st->eig_im);
   st->spectral_radius = fmax(hypot(st->eig_re[0], st->eig_im[0]),
                              hypot(st->eig_re[1], st->eig_im[1]));
   st->stable = st->spectral_radius < 1;
   st->unit_margin = 1 - st->spectral_radius;
   st->marginal = fabs(st->unit_margin) <= SS_MARGINAL_TOL;
-  st->jac_diff = NAN;
-  if (!opts || !opts->difference_check)
-    return SS_OK;
-  /* Central differences of the simulated map, column by column.  The step
-   * starts at 1e-6 (balancing the O(h^2) truncation against rounding of
-   * order 1e-16/h) and is divided by 10 while two successive estimates
-   * disagree by more than 1e-7 of their size: near a tangential switching
-   * the map is smooth only in a small neighbourhood.  When they never agree
-   * that well (a long orbit whose rounding grows before its truncation is
-   * small), the estimate of the closest successive pair is kept, not the
-   * last, which rounding spoils.  The choice of h looks only at the
-   * differences themselves, never at the analytic Jacobian. */
-  double s0[2] = {z0[0], z0[2]};
-  for (int j = 0; j < 2; j++) {
-    double est[5][2], best_gap = INFINITY;
-    int ne = 0, pick = -1;
-    for (double hr = 1e-6; hr >= 1e-10 && ne < 5; hr *= 0.1) {
-      double h = hr * (1 + fabs(s0[j])), sp[2], sm[2], op[2], om[2];
-      memcpy(sp, s0, sizeof sp);
-      memcpy(sm, s0, sizeof sm);
-      sp[j] += h;
-      sm[j] -= h;
-      if (ss_poincare(m, sp, turns, 64 * (size_t)(n + 1), op, NULL, NULL,
-                      NULL) ||
-          ss_poincare(m, sm, turns, 64 * (size_t)(n + 1), om, NULL, NULL, NULL))
-        break;
-      est[ne][0] = (op[0] - om[0]) / (sp[j] - sm[j]);
-      est[ne][1] = (op[1] - om[1]) / (sp[j] - sm[j]);
-      ne++;
-      if (ne < 2)
-        continue;
-      const double *cur = est[ne - 1], *prev = est[ne - 2];
-      double size = fmax(1.0, fmax(fabs(cur[0]), fabs(cur[1])));
-      double gap = fmax(fabs(cur[0] - prev[0]), fabs(cur[1] - prev[1])) / size;
-      if (gap < best_gap) {
-        best_gap = gap;
-        pick = ne - 1;
-      }
-      if (gap <= 1e-7)
-        break;
-    }
-    if (pick < 0)
+}
+
+/* Column j of the Jacobian by central differences of the simulated map
+ * over @a turns returns, from s0 = (z1, z1').  The step starts at 1e-6
+ * (balancing the O(h^2) truncation against rounding of order 1e-16/h) and
+ * is divided by 10 while two successive estimates disagree by more than
+ * 1e-7 of their size: near a tangential switching the map is smooth only in
+ * a small neighbourhood.  When they never agree that well (a long orbit
+ * whose rounding grows before its truncation is small), the estimate of the
+ * closest successive pair is kept, not the last, which rounding spoils.
+ * The choice of h looks only at the differences themselves, never at the
+ * analytic Jacobian.  NAN where no estimate could be made. */
+static void difference_column(const ss_model *m, int n, int turns,
+                              const double s0[2], int j, double col[2]) {
+  double est[5][2], best_gap = INFINITY;
+  int ne = 0, pick = -1;
+  for (double hr = 1e-6; hr >= 1e-10 && ne < 5; hr *= 0.1) {
+    double h = hr * (1 + fabs(s0[j])), sp[2], sm[2], op[2], om[2];
+    memcpy(sp, s0, sizeof sp);
+    memcpy(sm, s0, sizeof sm);
+    sp[j] += h;
+    sm[j] -= h;
+    if (ss_poincare(m, sp, turns, 64 * (size_t)(n + 1), op, NULL, NULL, NULL) ||
+        ss_poincare(m, sm, turns, 64 * (size_t)(n + 1), om, NULL, NULL, NULL))
+      break;
+    est[ne][0] = (op[0] - om[0]) / (sp[j] - sm[j]);
+    est[ne][1] = (op[1] - om[1]) / (sp[j] - sm[j]);
+    ne++;
+    if (ne < 2)
+      continue;
+    const double *cur = est[ne - 1], *prev = est[ne - 2];
+    double size = fmax(1.0, fmax(fabs(cur[0]), fabs(cur[1])));
+    double gap = fmax(fabs(cur[0] - prev[0]), fabs(cur[1] - prev[1])) / size;
+    if (gap < best_gap) {
+      best_gap = gap;
       pick = ne - 1;
-    st->jac_fd[0][j] = pick >= 0 ? est[pick][0] : NAN;
-    st->jac_fd[1][j] = pick >= 0 ? est[pick][1] : NAN;
+    }
+    if (gap <= 1e-7)
+      break;
+  }
+  if (pick < 0)
+    pick = ne - 1;
+  col[0] = pick >= 0 ? est[pick][0] : NAN;
+  col[1] = pick >= 0 ? est[pick][1] : NAN;
+}
+
+/* The cross-check of the analytic Jacobian: st->jac_fd column by column,
+ * and st->jac_diff, the largest difference (NAN if an estimate failed). */
+static void difference_check(const ss_model *m, int n, int turns,
+                             const double z0[4], ss_stab *st) {
+  double s0[2] = {z0[0], z0[2]}, col[2];
+  for (int j = 0; j < 2; j++) {
+    difference_column(m, n, turns, s0, j, col);
+    st->jac_fd[0][j] = col[0];
+    st->jac_fd[1][j] = col[1];
   }
   double diff = 0;
   for (int i = 0; i < 2; i++)
@@ -212,5 +228,20 @@ int ss_stability(const ss_model *m, int n, const ss_mode *modes,
                        st->jac_fd[1][1])
                      ? NAN
                      : diff;
+}
+
+int ss_stability(const ss_model *m, int n, const ss_mode *modes,
+                 const double *tau, const double z0[4],
+                 const ss_stab_opts *opts, ss_stab *st) {
+  if (!m || !modes || !tau || !z0 || n < 1 || n > SS_MAX_PHASES || !st)
+    return SS_EINVAL;
+  int turns = opts && opts->turns > 0 ? opts->turns : count_turns(n, modes);
+  memset(st, 0, sizeof *st);
+  if (map_jacobian(m, n, modes, tau, z0, st->jac) != SS_OK)
+    return SS_ESINGULAR; /* st all zero: jac is written only at the end */
+  set_multipliers(st);
+  st->jac_diff = NAN;
+  if (opts && opts->difference_check)
+    difference_check(m, n, turns, z0, st);
   return SS_OK;
 }
