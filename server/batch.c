@@ -212,6 +212,8 @@ static int next_line(srv__batch *b) {
       b->ok++;
     else
       b->failed++;
+    srv_metrics_batch_item(b->d->metrics, api_batch_endpoint(b->ab, it->i),
+                           it->ar.status);
     size_t held;
     long answer = (long)it->ar.held;
     b->line = api_batch_line(b->ab, it->i, &it->ar, &held);

@@ -23,12 +23,6 @@
 
 #include "internal.h"
 
-/* libmicrohttpd's memory per connection: the request line and headers
- * must fit (a larger block is answered 431).  libmicrohttpd clears it for
- * every request, so it is a per-request cost too: with 64 KiB /health
- * answered 40k requests/s, with 32 KiB 57k (wrk, one run). */
-#define CONN_MEMORY (32 * 1024)
-
 double srv__now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -36,7 +30,11 @@ double srv__now(void) {
 }
 
 static char *metrics_text(void *cls) {
-  return srv_metrics_render(((struct srv_daemon *)cls)->metrics);
+  struct srv_daemon *d = cls;
+  srv_pool_load_t load;
+  srv_pool_load(d->pool, &load);
+  srv_metrics_pool(d->metrics, &load);
+  return srv_metrics_render(d->metrics);
 }
 
 static int job_cancelled(void *cls) {
@@ -155,15 +153,18 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     return NULL;
   }
   raise_fd_limit(cfg->max_conn);
+  /* not libmicrohttpd's strict mode: 0.9.75 answers a request without Host
+   * there with its own page, whose header block it writes twice; request.c
+   * refuses that, and a space in the target (srv__target), itself */
   d->mhd = MHD_start_daemon(
       flags, (uint16_t)cfg->port, NULL, NULL, srv__handler, d,
       MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss, MHD_OPTION_CONNECTION_LIMIT,
       cfg->max_conn, MHD_OPTION_PER_IP_CONNECTION_LIMIT, cfg->per_ip,
       MHD_OPTION_CONNECTION_TIMEOUT, cfg->timeout,
-      MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)CONN_MEMORY,
-      MHD_OPTION_STRICT_FOR_CLIENT, (int)1, MHD_OPTION_NOTIFY_COMPLETED,
+      MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)SRV__CONN_MEMORY,
+      MHD_OPTION_STRICT_FOR_CLIENT, (int)0, MHD_OPTION_NOTIFY_COMPLETED,
       srv__completed, d, MHD_OPTION_NOTIFY_CONNECTION, srv__connection, d,
-      MHD_OPTION_END);
+      MHD_OPTION_URI_LOG_CALLBACK, srv__target, d, MHD_OPTION_END);
   if (!d->mhd) {
     fprintf(stderr, "stickslipd: cannot listen on %s port %d: %s\n", cfg->bind,
             cfg->port, strerror(errno));

@@ -26,15 +26,24 @@
  * against the memory budget */
 #define SRV__GZIP_LEVEL 3
 #define SRV__GZIP_STATE (256 * 1024)
+/* libmicrohttpd's memory per connection: the request line and headers
+ * must fit, and then an answer's headers.  libmicrohttpd clears it for
+ * every request, so it is a per-request cost too: with 64 KiB /health
+ * answered 40k requests/s, with 32 KiB 57k (wrk, one run). */
+#define SRV__CONN_MEMORY (32 * 1024)
+/* A header block (with libmicrohttpd's records of its headers) larger than
+ * this is answered 413: what is left is kept for the answer's headers. */
+#define SRV__HEADER_ROOM (SRV__CONN_MEMORY - 4096)
 
 /* One TCP connection, from NOTIFY_CONNECTION's start to its close. */
 typedef struct srv__conn {
   struct srv__conn *prev, *next;
   int fd;
-  double start;  /* of the request being received */
-  int receiving; /* 0 once the current request is wholly received */
-  int shut;      /* the monitor closed it */
-  int peer_port; /* of a TCP peer, else 0 */
+  double start;        /* of the request being received */
+  int receiving;       /* 0 once the current request is wholly received */
+  int shut;            /* the monitor closed it */
+  int peer_port;       /* of a TCP peer, else 0 */
+  int space_in_target; /* the current request's target, as sent */
   /* for diagnosis (srv_connection_watched) */
   atomic_int requests, suspended, resumed;
   char key[SRV_CLIENT_KEY];
@@ -76,7 +85,8 @@ typedef struct srv__req {
   int answered; /* the pool handed the request back with r->ar */
   char *buf;
   size_t len, cap;
-  int too_big;
+  int raw; /* answered on the socket (srv__send_raw_problem) */
+  const char *accept_encoding; /* Accept-Encoding of a 415, or NULL */
   int over_budget; /* the body came while the memory budget was spent */
   long held;       /* bytes of body and answer counted against the budget */
   double t0;
@@ -115,6 +125,10 @@ enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
                              const char *url, const char *method,
                              const char *version, const char *upload_data,
                              size_t *upload_data_size, void **con_cls);
+/* libmicrohttpd's URI_LOG_CALLBACK: the request line's target, before it is
+ * decoded (a space in it, which libmicrohttpd's lenient mode takes, is
+ * refused by the handler). */
+void *srv__target(void *cls, const char *uri, struct MHD_Connection *c);
 void srv__completed(void *cls, struct MHD_Connection *c, void **con_cls,
                     enum MHD_RequestTerminationCode toe);
 
@@ -143,6 +157,14 @@ enum MHD_Result srv__send_problem(struct MHD_Connection *c, srv__req *r,
                                   api_problem_kind kind, const char *detail,
                                   const char *limit, double limit_value,
                                   const char *allow);
+/* Write a problem of @a kind straight to the connection's socket and shut
+ * its sending side, for when libmicrohttpd cannot queue an answer (a body
+ * is being received; a header block has left no room for an answer's
+ * headers).  The request is then r->raw: the handler discards what still
+ * comes, and closes the connection once the request is in. */
+void srv__send_raw_problem(srv__req *r, api_problem_kind kind,
+                           const char *detail, const char *limit,
+                           double limit_value);
 /* Count @a bytes against the memory budget for request @a r (negative to
  * give them back). */
 void srv__hold(struct srv_daemon *d, srv__req *r, long bytes);

@@ -17,14 +17,17 @@
 
 #include "server.h"
 
-static const double BOUNDS[SRV_BUCKETS] = {0.0001, 0.00025, 0.0005, 0.001,
-                                           0.0025, 0.005,   0.01,   0.025,
-                                           0.05,   0.1,     1.0,    10.0};
+/* From /health's tenth of a millisecond to the minute of a search, a map
+ * or a certificate. */
+static const double BOUNDS[SRV_BUCKETS] = {
+    0.0001, 0.00025, 0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05,
+    0.1,    0.25,    0.5,    1.0,   2.5,    5.0,   10.0, 30.0,  60.0};
 
 #define N_STATUS 500 /* statuses 100..599, by status - 100 */
 
 typedef struct ep_metrics {
   atomic_ulong status[N_STATUS];
+  atomic_ulong batch_status[N_STATUS]; /* items of batches on this path */
   atomic_ulong latency_ns_sum;
   atomic_ulong latency_bucket[SRV_BUCKETS + 1];
 } ep_metrics;
@@ -35,8 +38,9 @@ struct srv_metrics {
   atomic_long in_flight;
   atomic_ulong rejected_busy, cancelled, slow, rejected_memory;
   atomic_long held, held_peak;
-  double start_time; /* since the epoch */
-  char build[160];   /* the labels of stickslip_build_info */
+  atomic_uint workers, busy, waiting, clients; /* the pool's load */
+  double start_time;                           /* since the epoch */
+  char build[160]; /* the labels of stickslip_build_info */
 };
 
 srv_metrics *srv_metrics_new(void) {
@@ -83,6 +87,21 @@ void srv_metrics_observe(srv_metrics *m, size_t ep, int status,
   while (b < SRV_BUCKETS && seconds > BOUNDS[b])
     b++;
   atomic_fetch_add(&e->latency_bucket[b], 1);
+}
+
+void srv_metrics_batch_item(srv_metrics *m, size_t ep, int status) {
+  if (ep >= m->n - 1)
+    ep = m->n - 1;
+  if (status < 100 || status > 599)
+    status = 500;
+  atomic_fetch_add(&m->ep[ep].batch_status[status - 100], 1);
+}
+
+void srv_metrics_pool(srv_metrics *m, const srv_pool_load_t *load) {
+  atomic_store(&m->workers, load->workers);
+  atomic_store(&m->busy, load->running);
+  atomic_store(&m->waiting, load->waiting);
+  atomic_store(&m->clients, load->clients);
 }
 
 void srv_metrics_busy(srv_metrics *m) {
@@ -235,6 +254,17 @@ char *srv_metrics_render(srv_metrics *m) {
         put(&s, "stickslip_requests_total{endpoint=\"%s\",code=\"%d\"} %lu\n",
             label(m, e), c + 100, k);
     }
+  put(&s, "# HELP stickslip_batch_items_total Items of POST /batch by "
+          "path and status.\n"
+          "# TYPE stickslip_batch_items_total counter\n");
+  for (size_t e = 0; e < m->n; e++)
+    for (int c = 0; c < N_STATUS; c++) {
+      unsigned long k = atomic_load(&m->ep[e].batch_status[c]);
+      if (k)
+        put(&s,
+            "stickslip_batch_items_total{endpoint=\"%s\",code=\"%d\"} %lu\n",
+            label(m, e), c + 100, k);
+    }
   put(&s, "# HELP stickslip_errors_total Requests answered 4xx or 5xx.\n"
           "# TYPE stickslip_errors_total counter\n");
   for (size_t e = 0; e < m->n; e++) {
@@ -253,6 +283,20 @@ char *srv_metrics_render(srv_metrics *m) {
       "# TYPE stickslip_requests_in_flight gauge\n"
       "stickslip_requests_in_flight %ld\n",
       atomic_load(&m->in_flight));
+  put(&s,
+      "# HELP stickslip_workers Threads of the compute pool (--workers).\n"
+      "# TYPE stickslip_workers gauge\nstickslip_workers %u\n"
+      "# HELP stickslip_workers_busy Threads of the compute pool running a "
+      "computation or a batch's item.\n"
+      "# TYPE stickslip_workers_busy gauge\nstickslip_workers_busy %u\n"
+      "# HELP stickslip_queued Computations and batch items waiting for a "
+      "worker.\n"
+      "# TYPE stickslip_queued gauge\nstickslip_queued %u\n"
+      "# HELP stickslip_queued_clients Clients with work waiting or "
+      "running.\n"
+      "# TYPE stickslip_queued_clients gauge\nstickslip_queued_clients %u\n",
+      atomic_load(&m->workers), atomic_load(&m->busy), atomic_load(&m->waiting),
+      atomic_load(&m->clients));
   put(&s,
       "# HELP stickslip_rejected_busy_total Requests answered 503 "
       "because their client's queue was full.\n"

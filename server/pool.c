@@ -251,6 +251,18 @@ void srv_pool_watch(srv_pool *p) {
   drop_waiting(p, 0, SRV_JOB_CANCELLED);
 }
 
+void srv_pool_load(srv_pool *p, srv_pool_load_t *out) {
+  unsigned clients = 0;
+  pthread_mutex_lock(&p->mu);
+  for (client *c = p->first; c; c = c->next)
+    clients++;
+  out->workers = p->n_threads;
+  out->running = p->running;
+  out->waiting = p->waiting;
+  out->clients = clients;
+  pthread_mutex_unlock(&p->mu);
+}
+
 void srv_pool_drain(srv_pool *p) { drop_waiting(p, 1, SRV_JOB_REFUSED); }
 
 void srv_pool_cancel_all(srv_pool *p) {

@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/socket.h>
+#include <time.h>
 
 #include <zlib.h>
 
@@ -173,6 +175,9 @@ enum MHD_Result srv__send_body(struct MHD_Connection *c, srv__req *r,
     MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "1");
   if (allow)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, allow);
+  if (r->accept_encoding)
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_ACCEPT_ENCODING,
+                            r->accept_encoding);
   if (close)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close");
   ok = MHD_queue_response(c, (unsigned)status, resp);
@@ -331,6 +336,37 @@ enum MHD_Result srv__send_problem(struct MHD_Connection *c, srv__req *r,
   api_response ar;
   api_problem(&ar, kind, detail, NULL, limit, limit_value);
   return srv__send_api(c, r, &ar, allow);
+}
+
+void srv__send_raw_problem(srv__req *r, api_problem_kind kind,
+                           const char *detail, const char *limit,
+                           double limit_value) {
+  api_response ar;
+  char head[512], date[64];
+  struct tm tm;
+  time_t now = time(NULL);
+  api_problem(&ar, kind, detail, NULL, limit, limit_value);
+  problem_with_id(r, &ar);
+  gmtime_r(&now, &tm);
+  strftime(date, sizeof date, "%a, %d %b %Y %H:%M:%S GMT", &tm);
+  int n = snprintf(head, sizeof head,
+                   "HTTP/1.1 %d %s\r\nDate: %s\r\nConnection: close\r\n"
+                   "Content-Type: %s\r\nX-Content-Type-Options: nosniff\r\n"
+                   "X-Request-Id: %s\r\nContent-Length: %zu\r\n\r\n",
+                   ar.status, MHD_get_reason_phrase_for((unsigned)ar.status),
+                   date, ar.content_type, r->rid, ar.len);
+  int fd = r->cn ? r->cn->fd : -1;
+  /* a fresh answer on a connection that sends nothing else: it fits the
+   * socket's buffer */
+  if (fd >= 0 && n > 0 && (size_t)n < sizeof head &&
+      send(fd, head, (size_t)n, MSG_NOSIGNAL | MSG_DONTWAIT) == n &&
+      send(fd, ar.body, ar.len, MSG_NOSIGNAL | MSG_DONTWAIT) == (ssize_t)ar.len)
+    r->bytes = ar.len;
+  if (fd >= 0)
+    shutdown(fd, SHUT_WR);
+  r->status = ar.status;
+  r->done = r->raw = r->close = 1;
+  api_response_free(&ar);
 }
 
 /* ---- the memory budget ---------------------------------------------------

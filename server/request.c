@@ -5,9 +5,13 @@
  * the request gets its id (X-Request-Id, given or made), its client (the
  * peer, or X-Forwarded-For from a trusted proxy), its route, and what can
  * be refused from the headers alone is decided then.  Framing that could
- * smuggle a request (two Content-Length headers, Content-Length with
- * Transfer-Encoding, two Host headers) is refused with 400 and the
- * connection is closed.
+ * smuggle a request or that libmicrohttpd 0.9.75 reads loosely (two
+ * Content-Length headers, Content-Length with Transfer-Encoding, a
+ * Transfer-Encoding other than one "chunked", whitespace between a
+ * header's name and its colon, a space in the target, no Host or two) is
+ * refused with 400 and the connection is closed, before libmicrohttpd acts
+ * on it; a header block too large to leave room for an answer's headers is
+ * refused with 413, written to the socket directly.
  *
  * Compute.  A request that computes is suspended once its body is in
  * (MHD_suspend_connection), handed to the pool (pool.c: per-client queues,
@@ -40,29 +44,57 @@ int srv_address_text(const char *s, char *out, size_t n) {
   return af && inet_ntop(af, ip, out, (socklen_t)n) ? 0 : -1;
 }
 
+static int is_trusted(const struct srv_daemon *d, const char *addr) {
+  for (int i = 0; i < d->cfg.n_trusted; i++)
+    if (strcmp(addr, d->cfg.trusted[i]) == 0)
+      return 1;
+  return 0;
+}
+
+static enum MHD_Result last_xff(void *cls, enum MHD_ValueKind kind,
+                                const char *key, const char *value) {
+  (void)kind;
+  if (strcasecmp(key, "X-Forwarded-For") == 0)
+    *(const char **)cls = value;
+  return MHD_YES;
+}
+
 /* The client of a request: the peer's address, or, when the peer is a
- * trusted proxy, the first address of X-Forwarded-For (the one the first
- * proxy saw), if it is an address. */
+ * trusted proxy, the rightmost address of X-Forwarded-For that a trusted
+ * proxy did not add: each proxy appends the address it got the request
+ * from, so the addresses right of the client's were written by proxies,
+ * and the ones left of it by the client, who can write anything.  Walked
+ * from the right of the last X-Forwarded-For header, past the trusted
+ * proxies; an entry that is not an address leaves the peer. */
 static void client_of(const struct srv_daemon *d, struct MHD_Connection *c,
                       srv__req *r) {
   const char *peer = r->cn ? r->cn->key : "?";
   snprintf(r->key, sizeof r->key, "%s", peer);
-  int trusted = 0;
-  for (int i = 0; i < d->cfg.n_trusted && !trusted; i++)
-    trusted = strcmp(peer, d->cfg.trusted[i]) == 0;
-  const char *xff = trusted ? MHD_lookup_connection_value(c, MHD_HEADER_KIND,
-                                                          "X-Forwarded-For")
-                            : NULL;
-  if (!xff)
+  const char *xff = NULL;
+  if (!is_trusted(d, peer))
     return;
-  char first[SRV_CLIENT_KEY];
-  xff += strspn(xff, " \t");
-  size_t n = strcspn(xff, ", \t");
-  if (n == 0 || n >= sizeof first)
-    return;
-  memcpy(first, xff, n);
-  first[n] = 0;
-  srv_address_text(first, r->key, sizeof r->key); /* the peer if not */
+  MHD_get_connection_values(c, MHD_HEADER_KIND, last_xff, &xff);
+  for (size_t end = xff ? strlen(xff) : 0; end > 0;) {
+    size_t start = end;
+    while (start > 0 && xff[start - 1] != ',')
+      start--;
+    size_t a = start, b = end;
+    while (a < b && (xff[a] == ' ' || xff[a] == '\t'))
+      a++;
+    while (b > a && (xff[b - 1] == ' ' || xff[b - 1] == '\t'))
+      b--;
+    char addr[SRV_CLIENT_KEY], text[SRV_CLIENT_KEY];
+    if (b - a == 0 || b - a >= sizeof addr)
+      return;
+    memcpy(addr, xff + a, b - a);
+    addr[b - a] = 0;
+    if (srv_address_text(addr, text, sizeof text))
+      return;
+    snprintf(r->key, sizeof r->key, "%s", text);
+    if (!is_trusted(d, text))
+      return;
+    end = start > 0 ? start - 1 : 0;
+  }
 }
 
 static int is_json_type(const char *ct) {
@@ -76,32 +108,69 @@ static int is_json_type(const char *ct) {
 }
 
 typedef struct framing {
-  int content_length, transfer_encoding, host;
+  int content_length, transfer_encoding, host, te_other, name_space, headers;
 } framing;
 
 static enum MHD_Result count_header(void *cls, enum MHD_ValueKind kind,
                                     const char *key, const char *value) {
   framing *f = cls;
   (void)kind;
-  (void)value;
+  f->headers++;
   f->content_length += strcasecmp(key, "Content-Length") == 0;
-  f->transfer_encoding += strcasecmp(key, "Transfer-Encoding") == 0;
   f->host += strcasecmp(key, "Host") == 0;
+  if (strcasecmp(key, "Transfer-Encoding") == 0) {
+    f->transfer_encoding++;
+    f->te_other += !value || strcasecmp(value, "chunked") != 0;
+  }
+  f->name_space += key[strcspn(key, " \t")] != 0;
   return MHD_YES;
 }
 
-/* Headers that would let two parties read different requests out of the
- * same bytes; NULL when there are none. */
-static const char *smuggling(struct MHD_Connection *c) {
-  framing f = {0, 0, 0};
-  MHD_get_connection_values(c, MHD_HEADER_KIND, count_header, &f);
-  if (f.content_length > 1)
+/* Framing that would let two parties read different requests out of the
+ * same bytes, or that libmicrohttpd would read loosely (a header named
+ * "Content-Length " is not its length; a Transfer-Encoding it does not
+ * know has it read the body until the connection closes); NULL when there
+ * is none.  @a f: the counts, for the caller. */
+static const char *smuggling(struct MHD_Connection *c, const char *version,
+                             framing *f) {
+  MHD_get_connection_values(c, MHD_HEADER_KIND, count_header, f);
+  if (f->name_space)
+    return "whitespace between a header's name and its colon";
+  if (f->content_length > 1)
     return "more than one Content-Length header";
-  if (f.content_length && f.transfer_encoding)
+  if (f->content_length && f->transfer_encoding)
     return "Content-Length together with Transfer-Encoding";
-  if (f.host > 1)
+  if (f->transfer_encoding > 1 || f->te_other)
+    return "a Transfer-Encoding other than one \"chunked\"";
+  if (f->host > 1)
     return "more than one Host header";
+  if (!f->host && strcmp(version, MHD_HTTP_VERSION_1_1) == 0)
+    return "an HTTP/1.1 request without a Host header";
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+  const srv__conn *cn = ci ? ci->socket_context : NULL;
+  if (cn && cn->space_in_target)
+    return "a space in the request target";
   return NULL;
+}
+
+void *srv__target(void *cls, const char *uri, struct MHD_Connection *c) {
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+  srv__conn *cn = ci ? ci->socket_context : NULL;
+  (void)cls;
+  if (cn)
+    cn->space_in_target = strchr(uri, ' ') != NULL;
+  return NULL; /* the request's context is made by the handler */
+}
+
+/* What a header block may take of a connection's memory, so that an
+ * answer's headers still fit: its bytes, and about 64 per header for
+ * libmicrohttpd's record of it. */
+static size_t header_room(struct MHD_Connection *c, const framing *f) {
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_REQUEST_HEADER_SIZE);
+  return (ci ? ci->header_size : 0) + 64 * (size_t)f->headers;
 }
 
 /* Decide an error answer now, send it on the next call. */
@@ -157,7 +226,8 @@ static void request_id(struct srv_daemon *d, struct MHD_Connection *c,
 /* The first call of a request: its headers are in.  Route it, and refuse
  * now what can be refused from the headers alone. */
 static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
-                             srv__req *r, const char *url, const char *method) {
+                             srv__req *r, const char *url, const char *method,
+                             const char *version) {
   size_t ep;
   const union MHD_ConnectionInfo *ci =
       MHD_get_connection_info(c, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
@@ -175,7 +245,18 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
   client_of(d, c, r);
   srv__cors_of(d, c, r);
   srv_metrics_in_flight(d->metrics, +1);
-  const char *bad = smuggling(c);
+  framing f = {0, 0, 0, 0, 0, 0};
+  const char *bad = smuggling(c, version, &f);
+  if (header_room(c, &f) > SRV__HEADER_ROOM) {
+    /* libmicrohttpd has no room left to build an answer's headers */
+    char detail[128];
+    snprintf(detail, sizeof detail,
+             "the header block is over the limit of %d bytes",
+             SRV__HEADER_ROOM);
+    srv__send_raw_problem(r, API_P_BODY_TOO_LARGE, detail, "max_header",
+                          SRV__HEADER_ROOM);
+    return MHD_YES;
+  }
   if (bad) {
     r->close = 1;
     return srv__send_problem(c, r, API_P_BAD_REQUEST, bad, NULL, 0, NULL);
@@ -207,6 +288,18 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
   if (!is_json_type(ct))
     return defer(r, API_P_MEDIA_TYPE,
                  "send the body as Content-Type: application/json", NULL);
+  const char *ce =
+      MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Encoding");
+  if (ce && strcasecmp(ce, "identity") != 0) {
+    /* RFC 9110 15.5.16: the answer names the codings taken */
+    char detail[128];
+    r->accept_encoding = "identity";
+    snprintf(detail, sizeof detail,
+             "a body with Content-Encoding %.24s is not taken: send it as "
+             "identity (uncompressed)",
+             ce);
+    return defer(r, API_P_MEDIA_TYPE, detail, NULL);
+  }
   const char *cl =
       MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Length");
   if (cl) {
@@ -224,8 +317,15 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
 /* A piece of the body: kept while it fits the limit, counted over it. */
 static enum MHD_Result take_body(struct srv_daemon *d, srv__req *r,
                                  const char *data, size_t n) {
-  if (r->too_big || r->len + n > d->cfg.lim.max_body) {
-    r->too_big = 1;
+  if (r->len + n > d->cfg.lim.max_body) {
+    /* libmicrohttpd takes no answer while a body comes: written to the
+     * socket, so that a chunk that never ends (a chunk size of 2^64-1)
+     * is not waited for */
+    char detail[128];
+    snprintf(detail, sizeof detail, "the body is over the limit of %zu bytes",
+             d->cfg.lim.max_body);
+    srv__send_raw_problem(r, API_P_BODY_TOO_LARGE, detail, "max_body",
+                          (double)d->cfg.lim.max_body);
     return MHD_YES;
   }
   if (r->over_budget || srv__over_budget(d)) {
@@ -368,12 +468,18 @@ enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
                              size_t *upload_data_size, void **con_cls) {
   struct srv_daemon *d = cls;
   srv__req *r = *con_cls;
-  (void)version;
   if (!r) {
     if (!(r = calloc(1, sizeof *r)))
       return MHD_NO;
     *con_cls = r;
-    return admit(d, c, r, url, method);
+    return admit(d, c, r, url, method, version);
+  }
+  if (r->raw) {
+    /* answered on the socket: discard the rest, close once it is in */
+    if (!*upload_data_size)
+      return MHD_NO;
+    *upload_data_size = 0;
+    return MHD_YES;
   }
   if (r->answered) /* resumed by the pool */
     return srv__send_api(c, r, &r->ar, NULL);
@@ -392,8 +498,6 @@ enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
     return take_body(d, r, upload_data, n);
   }
   srv__receiving(d, r->cn, 0);
-  if (r->too_big)
-    return too_large(d, c, r);
   if (r->preflight[0])
     return srv__send_body(c, r, 204, NULL, 0, NULL, 0, r->preflight, 0);
   if (!r->is_post) {
@@ -433,13 +537,32 @@ static void json_text(FILE *f, const char *s) {
   }
 }
 
+/* The plain log's text of a client's string: a control character, a
+ * space, a backslash or a byte outside ASCII as \xHH, so that a line is
+ * one request and its fields are split by spaces (a path of
+ * "/%0d%0aGET / 200 1" forges no line; a terminal escape is not one). */
+static void plain_text(FILE *f, const char *s) {
+  for (; *s; s++) {
+    unsigned char ch = (unsigned char)*s;
+    if (ch <= 0x20 || ch >= 0x7f || ch == '\\')
+      fprintf(f, "\\x%02x", ch);
+    else
+      fputc(ch, f);
+  }
+}
+
 /* One line per request on stderr: JSON (default) or the plain
  * "method path status us". */
 static void access_log(const struct srv_daemon *d, const srv__req *r,
                        int status, double dt) {
   long us = (long)(dt * 1e6);
   if (d->cfg.log_plain) {
-    fprintf(stderr, "%s %s %d %ld\n", r->method, r->path, status, us);
+    flockfile(stderr);
+    plain_text(stderr, r->method);
+    fputc(' ', stderr);
+    plain_text(stderr, r->path);
+    fprintf(stderr, " %d %ld\n", status, us);
+    funlockfile(stderr);
     return;
   }
   struct timespec ts;
@@ -464,17 +587,19 @@ static void access_log(const struct srv_daemon *d, const srv__req *r,
 }
 
 /* libmicrohttpd's NOTIFY_COMPLETED: the request is answered, or its client
- * gone. */
+ * gone: before its answer was queued, or while it was being sent (a stream
+ * cut, a batch's included); both are 499, as nginx logs them. */
 void srv__completed(void *cls, struct MHD_Connection *c, void **con_cls,
                     enum MHD_RequestTerminationCode toe) {
   struct srv_daemon *d = cls;
   srv__req *r = *con_cls;
   (void)c;
-  (void)toe;
   if (!r)
     return;
   double dt = srv__now() - r->t0;
-  int status = r->done ? r->status : 499; /* 499: client went away */
+  int cut = !r->raw && toe != MHD_REQUEST_TERMINATED_COMPLETED_OK &&
+            toe != MHD_REQUEST_TERMINATED_DAEMON_SHUTDOWN;
+  int status = r->done && !cut ? r->status : 499;
   srv_metrics_observe(d->metrics, r->ep, status, dt);
   srv_metrics_in_flight(d->metrics, -1);
   if (r->batch)

@@ -93,6 +93,14 @@ int srv_pool_submit(srv_pool *p, srv_job *j, const char *key);
 /* Flag the running jobs whose client is gone (ops->gone), and drop the
  * waiting ones (done() with SRV_JOB_CANCELLED). */
 void srv_pool_watch(srv_pool *p);
+/* What the pool holds now. */
+typedef struct srv_pool_load_t {
+  unsigned workers; /* threads */
+  unsigned running; /* jobs running: busy workers */
+  unsigned waiting; /* jobs queued (requests and batch items) */
+  unsigned clients; /* clients with a job waiting or running */
+} srv_pool_load_t;
+void srv_pool_load(srv_pool *p, srv_pool_load_t *out);
 /* Drop every waiting job (done() with SRV_JOB_REFUSED). */
 void srv_pool_drain(srv_pool *p);
 /* Flag every job to stop. */
@@ -104,7 +112,7 @@ void srv_pool_free(srv_pool *p);
 
 /* ---- metrics (metrics.c) ------------------------------------------------ */
 
-#define SRV_BUCKETS 12
+#define SRV_BUCKETS 18
 
 /*
  * Counters and latency histograms by endpoint: one row per row of the api's
@@ -127,6 +135,10 @@ void srv_metrics_over_budget(srv_metrics *m); /* a 503 for the memory budget */
 /* Bytes held by bodies and answers: add @a delta, return the new total. */
 long srv_metrics_held(srv_metrics *m, long delta);
 long srv_metrics_in_flight(srv_metrics *m, int delta);
+/* An item of a batch answered @a status; @a ep as for srv_metrics_observe. */
+void srv_metrics_batch_item(srv_metrics *m, size_t ep, int status);
+/* The pool's load, for the next srv_metrics_render. */
+void srv_metrics_pool(srv_metrics *m, const srv_pool_load_t *load);
 char *srv_metrics_render(srv_metrics *m); /* malloc'd */
 
 /** Start the daemon; prints the URL to stderr when ready.  NULL on error. */

@@ -159,6 +159,9 @@ int api_batch_open(const char *body, size_t len, const api_limits *lim,
                    api_batch **b, api_response *out);
 /** The number of items. */
 size_t api_batch_size(const api_batch *b);
+/** The endpoint index of item @a i (as api_route gives it), or
+ *  api_endpoint_count() when its path names no endpoint a batch takes. */
+size_t api_batch_endpoint(const api_batch *b, size_t i);
 /** The bytes the batch keeps until it is freed (its items' bodies). */
 size_t api_batch_held(const api_batch *b);
 /** Serve item @a i: its answer, or its problem, in @a out (as api_handle;

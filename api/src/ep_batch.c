@@ -44,6 +44,10 @@ size_t api_batch_size(const api_batch *b) { return b ? b->n : 0; }
 
 size_t api_batch_held(const api_batch *b) { return b ? b->held : 0; }
 
+size_t api_batch_endpoint(const api_batch *b, size_t i) {
+  return b && i < b->n ? b->items[i].ep : api_endpoint_count();
+}
+
 void api_batch_free(api_batch *b) {
   if (!b)
     return;
@@ -77,6 +81,7 @@ static int check_item(const json_t *v, batch_item *it, api_err *e) {
   const char *k;
   json_t *f;
   char paths[128];
+  it->ep = api_endpoint_count(); /* until its path names one */
   if (!json_is_object(v))
     return api__fail(e, API_P_INVALID_TYPE, NULL,
                      "an item of a batch must be an object with %s", ITEM_KEYS);
@@ -107,14 +112,16 @@ static int check_item(const json_t *v, batch_item *it, api_err *e) {
                      "\"path\" must be a string such as \"/orbit\"");
   computing_paths(paths, sizeof paths);
   const char *ps = json_string_value(path);
-  int route = api_route("POST", ps, &it->ep);
+  size_t ep;
+  int route = api_route("POST", ps, &ep);
   if (route == 404)
     return api__fail(e, API_P_NOT_FOUND, "/path",
                      "no endpoint %.60s; an item may ask %s", ps, paths);
-  if (route != 200 || api_endpoint_at(it->ep)->run_class != API_RUN_COMPUTE)
+  if (route != 200 || api_endpoint_at(ep)->run_class != API_RUN_COMPUTE)
     return api__fail(e, API_P_INVALID_VALUE, "/path",
                      "%.60s is not a computing endpoint; an item may ask %s",
                      ps, paths);
+  it->ep = ep;
   const json_t *body = json_object_get(v, "body");
   if (!body)
     return api__fail(e, API_P_MISSING_FIELD, "/body",
