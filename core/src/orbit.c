@@ -365,9 +365,9 @@ static void record_max(void *vp, double t, double g) {
   margin_set(c->mg, -g, c->phase, t);
 }
 
-static void violate(ss_orbit *o, const char *name, double value, int phase,
+static void violate(ss_orbit *o, ss_margin_id id, double value, int phase,
                     double t) {
-  snprintf(o->violation_name, sizeof o->violation_name, "%s", name);
+  o->violation_id = id;
   o->violation.value = value;
   o->violation.phase = phase;
   o->violation.t = t;
@@ -396,7 +396,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
   }
   o->transversal.value = INFINITY;
   o->transversal.phase = -1;
-  o->violation_name[0] = 0;
+  o->violation_id = SS_MARGIN_NONE;
   o->min_margin.value = INFINITY;
   o->min_margin.phase = -1;
   o->violation.value = INFINITY;
@@ -406,7 +406,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
   o->n_turns = 0;
   for (int k = 0; k < n; k++) {
     if (!(o->durations[k] > 0)) {
-      violate(o, "duration", o->durations[k], k, 0);
+      violate(o, SS_MARGIN_DURATION, o->durations[k], k, 0);
       return ss__fail(d, SS_INFEASIBLE, "durations", o->durations[k],
                       "phase %d (%s) has a non-positive duration %.6g", k,
                       ss_mode_name(o->modes[k]), o->durations[k]);
@@ -466,7 +466,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
     /* the certified finder: the first event must be this phase's end */
     int rc = ss_sim_next_event(&sim, ss_sim_time(&sim) + tau + slack, &ev);
     if (rc == SS_HORIZON) {
-      violate(o, "phase_end", g_end, k, tau);
+      violate(o, SS_MARGIN_PHASE_END, g_end, k, tau);
       return ss__fail(d, SS_INFEASIBLE, "phases", tau,
                       "phase %d (%s) does not end at its duration %.9g: its "
                       "switching function does not reach zero",
@@ -475,7 +475,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
     if (rc)
       return ss__fail(d, rc, "phases", tau, "event search failed");
     if (ev.kind == SS_EVENT_GRAZING) {
-      violate(o, "grazing", 0, k, ev.t - t0k);
+      violate(o, SS_MARGIN_GRAZING, 0, k, ev.t - t0k);
       check_fail(d,
                  "phase %d (%s) touches its switching surface tangentially at "
                  "t = %.9g (duration %.9g): a grazing orbit",
@@ -489,7 +489,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
     for (int i = 0; i <= k; i++)
       t_expect += o->durations[i];
     if (ev.t < t_expect - slack * (k + 1)) {
-      violate(o, "ends_early", ev.t - t_expect, k, ev.t - t0k);
+      violate(o, SS_MARGIN_ENDS_EARLY, ev.t - t_expect, k, ev.t - t0k);
       check_fail(d,
                  "phase %d (%s) ends early, at its first crossing t = %.9g "
                  "instead of %.9g",
@@ -501,7 +501,7 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
      * however little (within the slack above: beside a tangency at the
      * end, by about 2 |slope| / |curvature|) */
     if (!(g_slope > 0)) {
-      violate(o, "transversality", g_slope, k, tau);
+      violate(o, SS_MARGIN_TRANSVERSALITY, g_slope, k, tau);
       check_fail(d,
                  "phase %d (%s) meets its end with the switching function's "
                  "slope %.3g <= 0: it crossed zero before, so it ends early "
@@ -518,7 +518,8 @@ int ss_orbit_check(const ss_model *m, ss_orbit *o, ss_diag *d) {
     if (mode != SS_MODE_STICK)
       margin_set(&o->switching, sw, k, tau);
     if (ev.to != want) {
-      violate(o, "switching", mode == SS_MODE_STICK ? 0 : fmin(sw, 0), k, tau);
+      violate(o, SS_MARGIN_SWITCHING, mode == SS_MODE_STICK ? 0 : fmin(sw, 0),
+              k, tau);
       if (mode == SS_MODE_SLIP && want == SS_MODE_OVERSHOOT)
         check_fail(d,
                    "the solution violates (3.2) at the end of slip (phase %d, "
@@ -587,7 +588,7 @@ int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
   ss_stab_opts so = {o->n_turns, opts && opts->difference_check};
   rc = ss_stability(m, n, o->modes, o->durations, o->z0, &so, &o->stab);
   if (rc == SS_ESINGULAR) {
-    violate(o, "grazing", 0, -1, 0);
+    violate(o, SS_MARGIN_GRAZING, 0, -1, 0);
     return ss__fail(d, SS_INFEASIBLE, "orbit", 0,
                     "a phase of the orbit ends tangentially (grazing)");
   }
