@@ -178,8 +178,7 @@ static int curve_points(void) {
   o2.hi = 0.6;
   o2.max_points = 200; /* a 200-point curve: the middle of the boundary */
   o2.step = 0.005;
-  ss_continue_grazing(&PAPER, &DOWN, &DOWN.special[0], SS_PARAM_UR, 0.3, 1.5,
-                      &o2, &cv, NULL);
+  ss_continue_grazing(&PAPER, &DOWN, &DOWN.special[0], &o2, &cv, NULL);
   int n = cv.n_points;
   ss_curve_free(&cv);
   return n;

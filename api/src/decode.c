@@ -338,6 +338,11 @@ static const api_field PHYSICAL_FIELDS[] = {
     PARAM(ss_physical, k2), PARAM(ss_physical, Fs), PARAM(ss_physical, Fr),
     PARAM(ss_physical, v0)};
 const api_spec API_PARAMS_SPEC = API_SPEC(PARAM_FIELDS);
+
+#define NAME_STRING(name) #name,
+const char *const API_PARAMETER_NAMES[] = {SS_PARAM_NAMES(NAME_STRING)
+                                               SS_PHYS_NAMES(NAME_STRING) NULL};
+#undef NAME_STRING
 const api_spec API_PHYSICAL_SPEC = API_SPEC(PHYSICAL_FIELDS);
 
 void *api__alloc(size_t size, void **xp, const api_call *c) {

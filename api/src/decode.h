@@ -102,6 +102,11 @@ typedef struct api_params {
 /* The two fields "params" and "physical" (group 1), for an endpoint's spec;
  * @a type is the endpoint's request struct, @a m its api_params member. */
 extern const api_spec API_PARAMS_SPEC, API_PHYSICAL_SPEC;
+/* The names a request gives a parameter by, NULL-terminated: the
+ * dimensionless ones (ss_param_id), then the physical ones (ss_phys_id +
+ * API_N_DIMENSIONLESS), from the core's lists. */
+extern const char *const API_PARAMETER_NAMES[];
+enum { API_N_DIMENSIONLESS = SS_PARAM_V + 1 };
 #define API_PARAMS_FIELDS(type, m)                                             \
   {"params",                                                                   \
    API_T_OBJECT,                                                               \

@@ -1,8 +1,8 @@
 /*
  * ep_continue.c: POST /continue, a family of periodic orbits followed in
- * one dimensionless parameter from a starting orbit (as /orbit returns it)
- * or a guess, with its grazing, folds and multiplier crossings located
- * (ss_continue).
+ * one parameter from a starting orbit (as /orbit returns it) or a guess,
+ * with its grazing, folds and multiplier crossings located, and what they
+ * lead to (ss_continue_study).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -14,11 +14,6 @@
 #include "problem.h"
 #include "values.h"
 
-/* The dimensionless parameters (ss_param_id), then the physical ones
- * (ss_phys_id + 5) for a request in physical units. */
-static const char *const PARAMS[] = {"chi", "eta", "us", "ur", "V",  "m1", "m2",
-                                     "k1",  "k2",  "Fs", "Fr", "v0", NULL};
-enum { N_DIMENSIONLESS = 5 };
 static const char *const DIRECTIONS[] = {"both", "up", "down", NULL};
 static const int DIRECTION_OF[] = {0, 1, -1};
 
@@ -61,30 +56,10 @@ typedef struct cont_x {
   cont_fields fields;
   /* for the core */
   ss_orbit start;
-  ss_cont_opts opts;
+  ss_study_opts opts;
   /* the answer */
-  ss_branch b;
+  ss_study s;
   int rc;
-  ss_curve curves[SS_MAX_SPECIAL];
-  int n_curves;
-  /* with branch_switching: the family each special point of b starts (the
-   * period-2 family of a period doubling, the adjacent family past a
-   * grazing), of_special its index in b.special; why_none says why a
-   * period doubling starts none */
-  ss_branch *period2; /* malloc'd, room for SS_MAX_SPECIAL when used */
-  int of_special[SS_MAX_SPECIAL];
-  int n_period2;
-  char why_none[SS_MAX_SPECIAL][192];
-  /* past each grazing of b: the attractor, and the adjacent sequence */
-  struct {
-    int done;
-    double value;
-    ss_attractor a;
-    int adj_rc;
-    int adj_n; /* the adjacent sequence */
-    ss_mode adj_modes[SS_MAX_PHASES];
-    char adj_why[192];
-  } beyond[SS_MAX_SPECIAL];
 } cont_x;
 
 static int decode_range(const json_t *v, const char *ptr, void *dest,
@@ -171,7 +146,7 @@ static const api_field FOLLOW_FIELDS[] = {
     {"special", API_T_ENUM, API_REQUIRED, 0, 0, NULL,
      offsetof(cont_follow, special), 0, 0, 0, SPECIALS},
     {"parameter", API_T_ENUM, API_REQUIRED, 0, 0, NULL,
-     offsetof(cont_follow, parameter), 0, 0, 0, PARAMS},
+     offsetof(cont_follow, parameter), 0, 0, 0, API_PARAMETER_NAMES},
     {"range", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL,
      offsetof(cont_follow, range), 0, 0, 0, &RANGE},
 };
@@ -184,7 +159,7 @@ static const api_field FIELDS[] = {
     {"guess", API_T_OBJECT, API_REQUIRED, 0, 0, NULL, offsetof(cont_x, guess),
      API_HAS(cont_x, has_guess), 2, 1, &API_GUESS_SPEC},
     {"parameter", API_T_ENUM, API_REQUIRED, 0, 0, NULL,
-     offsetof(cont_x, parameter), 0, 0, 0, PARAMS},
+     offsetof(cont_x, parameter), 0, 0, 0, API_PARAMETER_NAMES},
     {"range", API_T_CUSTOM, API_REQUIRED, 0, 0, NULL, offsetof(cont_x, range),
      0, 0, 0, &RANGE},
     {"max_points", API_T_COUNT, API_DEFAULT, 2, 1e9, "max_points",
@@ -212,7 +187,7 @@ int ep_continue_decode(const json_t *root, const api_call *c, void **xp) {
   if (api__decode_request(&SPEC, root, x, &x->ap, c) ||
       (x->has_guess && api__guess_modes(&x->guess, "/guess", c)))
     return -1;
-  int physical = x->parameter >= N_DIMENSIONLESS;
+  int physical = x->parameter >= API_N_DIMENSIONLESS;
   if (x->ap.has_physical != physical)
     return api__fail(c->e, API_P_INVALID_VALUE, "/parameter",
                      x->ap.has_physical
@@ -235,10 +210,10 @@ int ep_continue_decode(const json_t *root, const api_call *c, void **xp) {
   memcpy(x->start.modes, modes->m, (size_t)modes->n * sizeof(ss_mode));
   for (int k = 0; k < dur->n; k++)
     x->start.durations[k] = api__time_in(&x->ap, dur->v[k]);
-  ss_cont_opts *o = &x->opts;
+  ss_cont_opts *o = &x->opts.family;
   if (physical) {
     o->physical = &x->ap.ph;
-    o->phys = (ss_phys_id)(x->parameter - N_DIMENSIONLESS);
+    o->phys = (ss_phys_id)(x->parameter - API_N_DIMENSIONLESS);
   } else {
     o->param = (ss_param_id)x->parameter;
   }
@@ -259,7 +234,7 @@ int ep_continue_decode(const json_t *root, const api_call *c, void **xp) {
   double v0 = values[x->parameter];
   if (x->has_follow) {
     double v2 = values[x->follow.parameter];
-    if (x->follow.parameter >= N_DIMENSIONLESS)
+    if (x->follow.parameter >= API_N_DIMENSIONLESS)
       return api__fail(c->e, API_P_INVALID_VALUE, "/follow/parameter",
                        "/follow/parameter must be a dimensionless parameter "
                        "(chi, eta, us, ur, V)");
@@ -270,13 +245,20 @@ int ep_continue_decode(const json_t *root, const api_call *c, void **xp) {
       return api__fail(c->e, API_P_INVALID_VALUE, "/follow/range",
                        "/follow/range [%.15g, %.15g] must contain %s = %.15g",
                        x->follow.range.lo, x->follow.range.hi,
-                       PARAMS[x->follow.parameter], v2);
+                       API_PARAMETER_NAMES[x->follow.parameter], v2);
   }
   if (!(v0 >= o->lo && v0 <= o->hi))
     return api__fail(c->e, API_P_INVALID_VALUE, "/range",
                      "/range [%.15g, %.15g] must contain the start's %s = "
                      "%.15g",
-                     o->lo, o->hi, PARAMS[x->parameter], v0);
+                     o->lo, o->hi, API_PARAMETER_NAMES[x->parameter], v0);
+  x->opts.follow = x->has_follow;
+  x->opts.follow_kind =
+      x->follow.special == 1 ? SS_SPECIAL_PERIOD_DOUBLING : SS_SPECIAL_GRAZING;
+  x->opts.follow_param = (ss_param_id)x->follow.parameter;
+  x->opts.follow_lo = x->follow.range.lo;
+  x->opts.follow_hi = x->follow.range.hi;
+  x->opts.branch_switching = x->branch_switching;
   return 0;
 }
 
@@ -284,91 +266,7 @@ int ep_continue_run(void *xp, const api_call *c) {
   cont_x *x = xp;
   ss_diag d;
   ss_diag_clear(&d);
-  x->rc = ss_continue(&x->ap.p, &x->start, &x->opts, &x->b, &d);
-  if (x->rc == SS_OK && x->has_follow) {
-    /* each grazing of the switching condition, in the second parameter,
-     * with what is left of the time budget */
-    ss_cont_opts o2 = x->opts;
-    o2.param = (ss_param_id)x->follow.parameter;
-    o2.lo = x->follow.range.lo;
-    o2.hi = x->follow.range.hi;
-    o2.direction = 0;
-    int pd = x->follow.special == 1;
-    for (int i = 0; i < x->b.n_special && x->rc == SS_OK; i++) {
-      const ss_special *g = &x->b.special[i];
-      if (g->kind != (pd ? SS_SPECIAL_PERIOD_DOUBLING : SS_SPECIAL_GRAZING))
-        continue;
-      ss_curve *cv = &x->curves[x->n_curves];
-      int rc =
-          pd ? ss_continue_period_doubling(&x->ap.p, &x->b, g, x->opts.param,
-                                           x->opts.lo, x->opts.hi, &o2, cv, &d)
-             : ss_continue_grazing(&x->ap.p, &x->b, g, x->opts.param,
-                                   x->opts.lo, x->opts.hi, &o2, cv, &d);
-      if (rc == SS_OK) {
-        x->n_curves++;
-      } else if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED ||
-                 rc == SS_ENOMEM) {
-        x->rc = rc;
-      } else { /* listed with no points and the reason */
-        ss_curve_free(cv);
-        cv->kind = pd ? SS_SPECIAL_PERIOD_DOUBLING : SS_SPECIAL_GRAZING;
-        cv->p1 = x->opts.param;
-        cv->p2 = o2.param;
-        cv->start = -1;
-        snprintf(cv->end[0], sizeof cv->end[0], "%s",
-                 d.text[0] ? d.text : ss_strerror(rc));
-        x->n_curves++;
-      }
-      ss_diag_clear(&d);
-    }
-  }
-  if ((x->branch_switching || x->b.n_special) &&
-      !(x->period2 = calloc(SS_MAX_SPECIAL, sizeof *x->period2)))
-    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
-  for (int i = 0; x->branch_switching && x->rc == SS_OK && i < x->b.n_special;
-       i++) {
-    const ss_special *pd = &x->b.special[i];
-    if (pd->kind != SS_SPECIAL_PERIOD_DOUBLING)
-      continue;
-    ss_diag d2;
-    ss_diag_clear(&d2);
-    ss_branch *b2 = &x->period2[x->n_period2];
-    int rc = ss_continue_period2(&x->ap.p, &x->b, pd, &x->opts, b2, &d2);
-    if (rc == SS_OK)
-      x->of_special[x->n_period2++] = i;
-    else if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED || rc == SS_ENOMEM)
-      x->rc = rc;
-    else
-      snprintf(x->why_none[i], sizeof x->why_none[i], "%s", d2.text);
-    if (rc != SS_OK)
-      ss_branch_free(b2);
-  }
-  /* past each grazing: the attractor, and the adjacent family */
-  for (int i = 0; !x->opts.physical && x->rc == SS_OK && i < x->b.n_special;
-       i++) {
-    const ss_special *g = &x->b.special[i];
-    if (g->kind != SS_SPECIAL_GRAZING)
-      continue;
-    ss_diag d2;
-    ss_diag_clear(&d2);
-    x->beyond[i].done =
-        ss_beyond_grazing(&x->ap.p, &x->b, g, x->opts.param,
-                          &x->beyond[i].value, &x->beyond[i].a) == SS_OK;
-    ss_branch adj;
-    int rc = ss_continue_adjacent(&x->ap.p, &x->b, g, &x->opts, &adj, &d2);
-    x->beyond[i].adj_rc = rc;
-    x->beyond[i].adj_n = adj.n_phases;
-    memcpy(x->beyond[i].adj_modes, adj.modes, sizeof adj.modes);
-    snprintf(x->beyond[i].adj_why, sizeof x->beyond[i].adj_why, "%s", d2.text);
-    if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED || rc == SS_ENOMEM)
-      x->rc = rc;
-    if (rc == SS_OK && x->branch_switching && x->n_period2 < SS_MAX_SPECIAL) {
-      x->period2[x->n_period2] = adj;
-      x->of_special[x->n_period2++] = i;
-    } else {
-      ss_branch_free(&adj);
-    }
-  }
+  x->rc = ss_continue_study(&x->ap.p, &x->start, &x->opts, &x->s, &d);
   if (x->rc == SS_OK)
     return 0;
   if (x->rc == SS_ELIMIT_TIME)
@@ -401,13 +299,13 @@ static json_t *multipliers(const double re[2], const double im[2]) {
  * physical one, omega of the physical parameters with the continued one at
  * @a value. */
 static double omega_at(const cont_x *x, double value) {
-  if (!x->opts.physical)
+  if (!x->opts.family.physical)
     return 1;
   ss_physical ph = x->ap.ph;
   double *f[] = {&ph.m1, &ph.m2, &ph.k1, &ph.k2, &ph.Fs, &ph.Fr, &ph.v0};
   ss_params p;
   double omega = 1;
-  *f[x->opts.phys] = value;
+  *f[x->opts.family.phys] = value;
   ss_params_from_physical(&ph, &p, &omega, NULL);
   return omega;
 }
@@ -454,11 +352,12 @@ static json_t *point(const cont_x *x, const ss_cont_point *p, int n,
  * family: the attractor simulation reaches, and whether the adjacent
  * sequence has a family there. */
 static json_t *beyond_json(const cont_x *x, int i) {
-  if (!x->beyond[i].done)
+  const ss_beyond *by = &x->s.beyond[i];
+  if (!by->done)
     return json_null();
-  const ss_attractor *a = &x->beyond[i].a;
+  const ss_attractor *a = &by->attractor;
   json_t *o = json_object();
-  api__set(o, "value", api__real(x->beyond[i].value));
+  api__set(o, "value", api__real(by->value));
   api__set(o, "found", json_boolean(a->found));
   api__set(o, "perpetual_slip", json_boolean(a->perpetual_slip));
   api__set(o, "turns_simulated", json_integer(a->turns_run));
@@ -474,16 +373,15 @@ static json_t *beyond_json(const cont_x *x, int i) {
     api__set(o, "s", api__vec(a->s, 2));
   }
   json_t *ad = json_object(), *am = json_array();
-  for (int k = 0; k < x->beyond[i].adj_n; k++)
-    json_array_append_new(am,
-                          json_string(ss_mode_name(x->beyond[i].adj_modes[k])));
+  for (int k = 0; k < by->adjacent_n_phases; k++)
+    json_array_append_new(am, json_string(ss_mode_name(by->adjacent_modes[k])));
   api__set(ad, "modes", am);
-  api__set(ad, "exists", json_boolean(x->beyond[i].adj_rc == SS_OK));
-  for (int k = 0; k < x->n_period2; k++)
-    if (x->of_special[k] == i)
+  api__set(ad, "exists", json_boolean(by->adjacent_rc == SS_OK));
+  for (int k = 0; k < x->s.n_branches; k++)
+    if (x->s.of_special[k] == i)
       api__set(ad, "branch", json_integer(k + 1));
-  if (x->beyond[i].adj_rc != SS_OK)
-    api__set(ad, "reason", json_string(x->beyond[i].adj_why));
+  if (by->adjacent_rc != SS_OK)
+    api__set(ad, "reason", json_string(by->adjacent_why));
   api__set(o, "adjacent", ad);
   return o;
 }
@@ -513,7 +411,7 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
     api__set(o, "value", api__real(s->value));
     api__set(o, "precision", api__real(s->precision));
     if (s->kind == SS_SPECIAL_GRAZING) {
-      api__set(o, "margin", json_string(s->margin));
+      api__set(o, "margin", json_string(ss_margin_name(s->margin)));
       api__set(o, "phase", json_integer(s->at.min_margin.phase));
       api__set(o, "t",
                api__real(s->at.min_margin.t / omega_at(x, s->at.value)));
@@ -527,13 +425,13 @@ static json_t *branch_json(const cont_x *x, const ss_branch *b, int first) {
     api__set(o, "detail", json_string(s->detail));
     if (first && x->branch_switching && s->kind == SS_SPECIAL_PERIOD_DOUBLING) {
       int at = -1;
-      for (int k = 0; k < x->n_period2; k++)
-        if (x->of_special[k] == i)
+      for (int k = 0; k < x->s.n_branches; k++)
+        if (x->s.of_special[k] == i)
           at = k + 1;
       if (at > 0)
         api__set(o, "branch", json_integer(at));
       else
-        api__set(o, "no_branch", json_string(x->why_none[i]));
+        api__set(o, "no_branch", json_string(x->s.why_none[i]));
     }
     api__set(o, "orbit",
              point(x, &s->at, b->n_phases, (1u << N_POINT_FIELDS) - 1));
@@ -558,18 +456,19 @@ int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
   const cont_x *x = xp;
   json_t *o = json_object();
   json_t *branches = json_array();
-  json_array_append_new(branches, branch_json(x, &x->b, 1));
-  for (int i = 0; i < x->n_period2; i++)
-    json_array_append_new(branches, branch_json(x, &x->period2[i], 0));
+  json_array_append_new(branches, branch_json(x, &x->s.family, 1));
+  for (int i = 0; i < x->s.n_branches; i++)
+    json_array_append_new(branches, branch_json(x, &x->s.branches[i], 0));
   api__set(o, "branches", branches);
   json_t *curves = json_array();
-  for (int i = 0; i < x->n_curves; i++) {
-    const ss_curve *cv = &x->curves[i];
-    const char *n1 = PARAMS[cv->p1], *n2 = PARAMS[cv->p2];
+  for (int i = 0; i < x->s.n_curves; i++) {
+    const ss_curve *cv = &x->s.curves[i];
+    const char *n1 = API_PARAMETER_NAMES[cv->p1],
+               *n2 = API_PARAMETER_NAMES[cv->p2];
     json_t *co = json_object(), *names = json_array(), *cp = json_array();
     api__set(co, "type", json_string(ss_special_name(cv->kind)));
     if (cv->kind == SS_SPECIAL_GRAZING) {
-      api__set(co, "margin", json_string(cv->margin));
+      api__set(co, "margin", json_string(ss_margin_name(cv->margin)));
       api__set(co, "phase", json_integer(cv->phase));
     }
     json_array_append_new(names, json_string(n1));
@@ -600,7 +499,7 @@ int ep_continue_encode(const void *xp, const api_call *c, api_response *out) {
     json_array_append_new(curves, co);
   }
   api__set(o, "curves", curves);
-  api__set(o, "parameter", json_string(PARAMS[x->parameter]));
+  api__set(o, "parameter", json_string(API_PARAMETER_NAMES[x->parameter]));
   return api__answer(o, &SPEC, x, &x->ap, c, out);
 }
 
@@ -608,11 +507,6 @@ void ep_continue_release(void *xp) {
   cont_x *x = xp;
   if (!x)
     return;
-  ss_branch_free(&x->b);
-  for (int i = 0; i < x->n_curves; i++)
-    ss_curve_free(&x->curves[i]);
-  for (int i = 0; i < x->n_period2; i++)
-    ss_branch_free(&x->period2[i]);
-  free(x->period2);
+  ss_study_free(&x->s);
   free(x);
 }

@@ -25,12 +25,6 @@ static const char *const KINDS[] = {"overshoot", "stick-slip", "other", "all",
 static const unsigned KIND_MASK[] = {SS_ORBIT_OVERSHOOT, SS_ORBIT_STICKSLIP,
                                      SS_ORBIT_OTHER, SS_ORBIT_ALL};
 
-/* The dimensionless parameters (ss_param_id), then the physical ones
- * (ss_phys_id + 5). */
-static const char *const PARAMS[] = {"chi", "eta", "us", "ur", "V",  "m1", "m2",
-                                     "k1",  "k2",  "Fs", "Fr", "v0", NULL};
-enum { N_DIMENSIONLESS = 5 };
-
 /* The fields of an orbit in a cell's line; the first N_DEFAULT_FIELDS of
  * them are sent when the request names none. */
 static const char *const ORBIT_FIELDS[] = {
@@ -54,7 +48,7 @@ enum {
 };
 
 typedef struct map_axis {
-  int parameter; /* index in PARAMS */
+  int parameter; /* index in API_PARAMETER_NAMES */
   double from, to;
   long long n;
 } map_axis;
@@ -85,7 +79,7 @@ typedef struct map_x {
 
 static const api_field AXIS_FIELDS[] = {
     {"parameter", API_T_ENUM, API_REQUIRED, 0, 0, NULL,
-     offsetof(map_axis, parameter), 0, 0, 0, PARAMS},
+     offsetof(map_axis, parameter), 0, 0, 0, API_PARAMETER_NAMES},
     {"from", API_T_NUMBER, API_REQUIRED, -INFINITY, INFINITY, NULL,
      offsetof(map_axis, from)},
     {"to", API_T_NUMBER, API_REQUIRED, -INFINITY, INFINITY, NULL,
@@ -120,7 +114,7 @@ static int decode_axes(const json_t *v, const char *ptr, void *dest,
     return api__fail(c->e, API_P_INVALID_VALUE, "/axes/1/parameter",
                      "the two axes must vary different parameters, not both "
                      "%s",
-                     PARAMS[ax->a[0].parameter]);
+                     API_PARAMETER_NAMES[ax->a[0].parameter]);
   return 0;
 }
 
@@ -208,7 +202,7 @@ int ep_map_decode(const json_t *root, const api_call *c, void **xp) {
     const map_axis *a = &x->axes.a[i];
     char p[64];
     snprintf(p, sizeof p, "/axes/%d/parameter", i);
-    int physical = a->parameter >= N_DIMENSIONLESS;
+    int physical = a->parameter >= API_N_DIMENSIONLESS;
     if (x->ap.has_physical != physical)
       return api__fail(c->e, API_P_INVALID_VALUE, p,
                        x->ap.has_physical
@@ -245,8 +239,8 @@ int ep_map_decode(const json_t *root, const api_call *c, void **xp) {
 
 /* The core's axis of request axis @a a. */
 static ss_map_axis core_axis(const map_axis *a) {
-  ss_map_axis s = {a->parameter >= N_DIMENSIONLESS
-                       ? a->parameter - N_DIMENSIONLESS
+  ss_map_axis s = {a->parameter >= API_N_DIMENSIONLESS
+                       ? a->parameter - API_N_DIMENSIONLESS
                        : a->parameter,
                    a->from, a->to, (int)a->n};
   return s;
@@ -402,7 +396,7 @@ int ep_map_encode(const void *xp, const api_call *c, api_response *out) {
     }
     API_W_LIT(&w, "],\"at\":{");
     for (int a = 0; a < mp->n_axes; a++) {
-      const char *name = PARAMS[x->axes.a[a].parameter];
+      const char *name = API_PARAMETER_NAMES[x->axes.a[a].parameter];
       if (a)
         API_W_LIT(&w, ",");
       api__w_str(&w, name, strlen(name));

@@ -232,12 +232,11 @@ static json_t *margin_json(const ss_margin *mg, const api_params *ap) {
 
 static json_t *margins_json(const ss_orbit *o, const api_params *ap) {
   json_t *mg = json_object();
-  api__set(mg, "slip_below_V", margin_json(&o->slip_below, ap));
-  api__set(mg, "overshoot_above_V", margin_json(&o->over_above, ap));
-  api__set(mg, "stick_below_ur", margin_json(&o->stick_upper, ap));
-  api__set(mg, "stick_above_minus_ur", margin_json(&o->stick_lower, ap));
-  api__set(mg, "switching", margin_json(&o->switching, ap));
-  api__set(mg, "transversality", margin_json(&o->transversal, ap));
+  const ss_margin *each[] = {&o->slip_below,  &o->over_above, &o->stick_upper,
+                             &o->stick_lower, &o->switching,  &o->transversal};
+  for (int k = 0; k < 6; k++) /* SS_MARGIN_SLIP_BELOW_V .. _TRANSVERSALITY */
+    api__set(mg, ss_margin_name((ss_margin_id)(SS_MARGIN_SLIP_BELOW_V + k)),
+             margin_json(each[k], ap));
   api__set(mg, "min", margin_json(&o->min_margin, ap));
   api__set(mg, "units",
            json_string(ap->has_physical ? "values dimensionless; t in the "
@@ -274,7 +273,7 @@ static json_t *rejected_json(const ss_orbit_report *rep, const api_params *ap) {
   json_t *j = json_object(), *v = margin_json(&o->violation, ap);
   api__set(j, "kind", json_string(ss_orbit_kind_name(o->kind)));
   api__set(j, "phases", api__phases(o->n_phases, o->modes, o->durations, ap));
-  api__set(v, "condition", json_string(o->violation_name));
+  api__set(v, "condition", json_string(ss_margin_name(o->violation_id)));
   api__set(j, "violation", v);
   api__set(j, "margins", margins_json(o, ap));
   api__set(j, "reason", json_string(rep->reason));

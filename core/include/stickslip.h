@@ -591,6 +591,27 @@ typedef struct ss_stab_opts {
   int difference_check;
 } ss_stab_opts;
 
+/** The feasibility conditions of an orbit (section 5), by which its margins
+ *  and the condition it violates are named.  The first six are the margins
+ *  of ss_orbit; the others are conditions a rejected root can fail. */
+typedef enum ss_margin_id {
+  SS_MARGIN_NONE = 0,                 /**< "": none (a feasible orbit) */
+  SS_MARGIN_SLIP_BELOW_V = 1,         /**< "slip_below_V" */
+  SS_MARGIN_OVERSHOOT_ABOVE_V = 2,    /**< "overshoot_above_V" */
+  SS_MARGIN_STICK_BELOW_UR = 3,       /**< "stick_below_ur" */
+  SS_MARGIN_STICK_ABOVE_MINUS_UR = 4, /**< "stick_above_minus_ur" */
+  SS_MARGIN_SWITCHING = 5, /**< "switching": the mode rule at a phase end */
+  SS_MARGIN_TRANSVERSALITY = 6, /**< "transversality": a phase end's slope */
+  SS_MARGIN_DURATION = 7,       /**< "duration": a duration not > 0 */
+  SS_MARGIN_PHASE_END = 8,      /**< "phase_end": the phase does not end */
+  SS_MARGIN_GRAZING = 9,        /**< "grazing": a touch of a surface */
+  SS_MARGIN_ENDS_EARLY = 10     /**< "ends_early": a crossing before the end */
+} ss_margin_id;
+
+/** The name of a margin or condition, as listed in ss_margin_id ("" for
+ *  SS_MARGIN_NONE); NULL for anything else. */
+SS_API const char *ss_margin_name(ss_margin_id id);
+
 /** How far a constraint is from being violated, and where. */
 typedef struct ss_margin {
   double value; /**< >= 0 when satisfied; INFINITY when it never binds */
@@ -651,12 +672,13 @@ typedef struct ss_orbit {
   int iterations;         /**< Newton iterations of the final solve */
   ss_orbit_source source; /**< how the search found it */
   /** When ss_orbit_check() rejects it: the condition that fails
-   *  (violation_name: "duration", "phase_end", "grazing", "ends_early",
-   *  "transversality", "switching"), its margin (< 0: how far it fails; 0 for a
+   *  (violation_id: SS_MARGIN_DURATION, _PHASE_END, _GRAZING, _ENDS_EARLY,
+   *  _TRANSVERSALITY, _SWITCHING), its margin (< 0: how far it fails; 0 for a
    * grazing), the phase and the time in it.  The margins above then cover the
-   * phases up to that one.  violation_name is empty for a feasible orbit. */
+   * phases up to that one.  violation_id is SS_MARGIN_NONE for a feasible
+   * orbit. */
   ss_margin violation;
-  char violation_name[16];
+  ss_margin_id violation_id;
 } ss_orbit;
 
 /** Options of ss_orbit_find(); zero-initialise for the defaults. */
@@ -876,6 +898,11 @@ SS_API int ss_stability(const ss_model *m, int n, const ss_mode *modes,
 /* Continuation of an orbit family in one parameter                         */
 /* ------------------------------------------------------------------------ */
 
+/** The names of the dimensionless parameters in the order of ss_param_id,
+ *  each as X(name): the one list ss_param_name() and tables of names (a
+ *  decoder's, say) expand. */
+#define SS_PARAM_NAMES(X) X(chi) X(eta) X(us) X(ur) X(V)
+
 /** The dimensionless parameters, for continuation. */
 typedef enum ss_param_id {
   SS_PARAM_CHI = 0,
@@ -890,6 +917,10 @@ SS_API const char *ss_param_name(ss_param_id id);
 
 /** The parameter called @a name; SS_OK or SS_EINVAL. */
 SS_API int ss_param_by_name(const char *name, ss_param_id *id);
+
+/** The names of the physical parameters in the order of ss_phys_id, each
+ *  as X(name), as SS_PARAM_NAMES. */
+#define SS_PHYS_NAMES(X) X(m1) X(m2) X(k1) X(k2) X(Fs) X(Fr) X(v0)
 
 /** The physical parameters, for continuation in physical units. */
 typedef enum ss_phys_id {
@@ -943,10 +974,11 @@ typedef struct ss_special {
    *  (the location's precision) */
   double precision;
   ss_cont_point at; /**< the orbit there (the feasible side of a grazing) */
-  /** grazing: the margin that reaches zero ("switching", "slip_below_V",
-   *  "overshoot_above_V", "stick_below_ur", "stick_above_minus_ur",
-   *  "transversality"), its phase and time in at.min_margin */
-  char margin[24];
+  /** grazing: the margin that reaches zero (SS_MARGIN_SWITCHING, one of
+   *  the four of a phase's inside, SS_MARGIN_SLIP_BELOW_V ..
+   *  _STICK_ABOVE_MINUS_UR, or SS_MARGIN_TRANSVERSALITY), its phase and time
+   *  in at.min_margin; SS_MARGIN_NONE for the other kinds */
+  ss_margin_id margin;
   /** The stability verdict below and above the value (in increasing
    *  parameter) */
   int stable_before, stable_after;
@@ -981,6 +1013,12 @@ typedef struct ss_cont_opts {
 typedef struct ss_branch {
   int n_phases;
   ss_mode modes[SS_MAX_PHASES];
+  /** The continued parameter and its range, as ss_continue() was asked:
+   *  param, or with physical set the physical parameter phys */
+  ss_param_id param;
+  int physical;
+  ss_phys_id phys;
+  double lo, hi;
   int n_points;
   ss_cont_point *points; /**< malloc'd; ss_branch_free() */
   int start;             /**< the index of the starting orbit in points */
@@ -1060,15 +1098,16 @@ SS_API int ss_attractor_from(const ss_model *m, const double s0[2],
 
 /**
  * What the motion does just beyond the grazing @a g that ends the family
- * @a b (continued in @a param): from the grazing orbit's start, at the
+ * @a b (continued in b->param): from the grazing orbit's start, at the
  * parameter 1e-4 (relative) past the located value on the side where the
  * family does not exist (*value), the attractor simulation reaches
  * (ss_attractor_from, 5000 returns, periods up to 64 returns).
- * @return SS_OK; SS_EINVAL (@a g is not a grazing that ends @a b).
+ * @return SS_OK; SS_EINVAL (@a g is not a grazing that ends @a b, or @a b
+ *         is a family in a physical parameter).
  */
 SS_API int ss_beyond_grazing(const ss_params *p, const ss_branch *b,
-                             const ss_special *g, ss_param_id param,
-                             double *value, ss_attractor *a);
+                             const ss_special *g, double *value,
+                             ss_attractor *a);
 
 /**
  * The family on the other side of the grazing @a g that ends the family
@@ -1100,7 +1139,7 @@ typedef struct ss_curve_point {
  *  parameter changes. */
 typedef struct ss_curve {
   ss_special_kind kind; /**< SS_SPECIAL_GRAZING or _PERIOD_DOUBLING */
-  char margin[24];      /**< the margin that is zero along it */
+  ss_margin_id margin;  /**< the margin that is zero along it (a grazing) */
   int phase;            /**< at the end of this phase */
   ss_param_id p1, p2;
   int n_points;
@@ -1110,22 +1149,25 @@ typedef struct ss_curve {
 } ss_curve;
 
 /**
- * Follow the grazing @a g of the family @a b (continued in p1 over
- * [lo1, hi1] from parameters @a p) as a second parameter, o2->param, moves
- * over [o2->lo, o2->hi]: pseudo-arclength on the duration equations and the
- * grazing margin = 0, in (durations, p1, p2).  At every point the orbit
- * solved 1e-7 (relative) either side in p1 is feasible on one side only,
- * or the curve ends.  Only a grazing of the switching condition at a phase
- * end (margin "switching") can be followed today.
+ * Follow the grazing @a g of the family @a b (continued from parameters
+ * @a p in p1 = b->param over [b->lo, b->hi]) as a second parameter,
+ * o2->param, moves over [o2->lo, o2->hi] (o2's direction and physical are
+ * not read): pseudo-arclength on the duration equations and the grazing's
+ * equation, in (durations, p1, p2).  At every point the orbit solved 1e-7
+ * (relative) either side in p1 is feasible on one side only, or the curve
+ * ends.  A grazing of the switching condition at the end of a slip or
+ * overshoot (SS_MARGIN_SWITCHING), of a phase's end
+ * (SS_MARGIN_TRANSVERSALITY) or of a margin's maximum inside a phase can
+ * be followed.
  * @return SS_OK; SS_EINVAL (bad options, another kind of special point or
- *         margin, p2 == p1, a range without p2's value); SS_ENOCONV (no
- *         curve through the point); SS_ELIMIT_TIME, SS_ECANCELED (with what
- *         was found); SS_ENOMEM.  Release @a cv with ss_curve_free().
+ *         margin, p2 == p1, a family in a physical parameter, a range
+ *         without p2's value); SS_ENOCONV (no curve through the point);
+ *         SS_ELIMIT_TIME, SS_ECANCELED (with what was found); SS_ENOMEM.
+ *         Release @a cv with ss_curve_free().
  */
 SS_API int ss_continue_grazing(const ss_params *p, const ss_branch *b,
-                               const ss_special *g, ss_param_id p1, double lo1,
-                               double hi1, const ss_cont_opts *o2, ss_curve *cv,
-                               ss_diag *d);
+                               const ss_special *g, const ss_cont_opts *o2,
+                               ss_curve *cv, ss_diag *d);
 
 /**
  * Follow the period doubling @a pd of the family @a b as a second parameter
@@ -1135,13 +1177,87 @@ SS_API int ss_continue_grazing(const ss_params *p, const ss_branch *b,
  * feasible_side 0.
  */
 SS_API int ss_continue_period_doubling(const ss_params *p, const ss_branch *b,
-                                       const ss_special *pd, ss_param_id p1,
-                                       double lo1, double hi1,
+                                       const ss_special *pd,
                                        const ss_cont_opts *o2, ss_curve *cv,
                                        ss_diag *d);
 
 /** Release what ss_continue_grazing() allocated.  NULL-safe. */
 SS_API void ss_curve_free(ss_curve *c);
+
+/** What ss_continue_study() does besides continuing the family;
+ *  zero-initialise, then set family.param, .lo and .hi. */
+typedef struct ss_study_opts {
+  /** The family, as for ss_continue(); also how the curves and the
+   *  families branch switching starts are continued (their step,
+   *  max_points, time budget each, cancel hook) */
+  ss_cont_opts family;
+  /** 1: follow each special point of kind follow_kind (SS_SPECIAL_GRAZING
+   *  or SS_SPECIAL_PERIOD_DOUBLING) in follow_param over [follow_lo,
+   *  follow_hi] (ss_continue_grazing(), ss_continue_period_doubling()) */
+  int follow;
+  ss_special_kind follow_kind;
+  ss_param_id follow_param;
+  double follow_lo, follow_hi;
+  /** 1: continue the family each special point starts: the period-2
+   *  family at a period doubling (ss_continue_period2()), the adjacent
+   *  family past a grazing (ss_continue_adjacent()) */
+  int branch_switching;
+} ss_study_opts;
+
+/** Past a grazing that ends the family (a dimensionless one). */
+typedef struct ss_beyond {
+  /** ss_beyond_grazing() succeeded: value and attractor are set */
+  int done;
+  double value;
+  ss_attractor attractor;
+  /** ss_continue_adjacent()'s status: SS_OK when the adjacent sequence
+   *  has a family there; its modes, and why it has none */
+  int adjacent_rc;
+  int adjacent_n_phases;
+  ss_mode adjacent_modes[SS_MAX_PHASES];
+  char adjacent_why[192];
+} ss_beyond;
+
+/** A family with what its special points lead to. */
+typedef struct ss_study {
+  ss_branch family;
+  /** One curve per followed special point, in the family's order; one
+   *  that could not be followed has no points, start -1 and the reason in
+   *  end[0] */
+  int n_curves;
+  ss_curve curves[SS_MAX_SPECIAL];
+  /** With branch_switching: the families started, each from the special
+   *  point family.special[of_special[i]] (malloc'd) */
+  int n_branches;
+  ss_branch *branches;
+  int of_special[SS_MAX_SPECIAL];
+  /** Per special point of the family: why a period doubling starts no
+   *  family (with branch_switching), and past a grazing what happens */
+  char why_none[SS_MAX_SPECIAL][192];
+  ss_beyond beyond[SS_MAX_SPECIAL];
+} ss_study;
+
+/**
+ * A family and what its special points lead to, in one call: the family
+ * (ss_continue()); with opts->follow, each special point of that kind
+ * followed in a second parameter; with opts->branch_switching, the
+ * period-2 family at each period doubling; past each grazing (of a family
+ * in a dimensionless parameter) the attractor (ss_beyond_grazing()) and the
+ * adjacent sequence (ss_continue_adjacent(), its family kept with
+ * branch_switching).  A special point that leads nowhere says why in @a s;
+ * only running out of time, a cancel or memory stops the study.
+ * @param[out] s the study; release with ss_study_free() whatever happens
+ * @param d      details of the family's own failure, may be NULL
+ * @return SS_OK; as ss_continue() for the family; SS_ELIMIT_TIME,
+ *         SS_ECANCELED or SS_ENOMEM from a later step (@a s holds what was
+ *         found, @a d is not written).  Thread-safe (the cancel hook aside).
+ */
+SS_API int ss_continue_study(const ss_params *p, const ss_orbit *start,
+                             const ss_study_opts *opts, ss_study *s,
+                             ss_diag *d);
+
+/** Release what ss_continue_study() allocated.  NULL-safe; zeroes @a s. */
+SS_API void ss_study_free(ss_study *s);
 
 /* ------------------------------------------------------------------------ */
 /* Parameter maps                                                            */

@@ -365,9 +365,9 @@ static void record_max(void *vp, double t, double g) {
   margin_set(c->mg, -g, c->phase, t);
 }
 
-static void violate(ss_orbit *o, const char *name, double value, int phase,
+static void violate(ss_orbit *o, ss_margin_id id, double value, int phase,
                     double t) {
-  snprintf(o->violation_name, sizeof o->violation_name, "%s", name);
+  o->violation_id = id;
   o->violation.value = value;
   o->violation.phase = phase;
   o->violation.t = t;
@@ -403,7 +403,7 @@ static void check_reset(ss_orbit *o) {
   }
   o->transversal.value = INFINITY;
   o->transversal.phase = -1;
-  o->violation_name[0] = 0;
+  o->violation_id = SS_MARGIN_NONE;
   o->min_margin.value = INFINITY;
   o->min_margin.phase = -1;
   o->violation.value = INFINITY;
@@ -418,7 +418,7 @@ static int check_durations(ss_orbit *o, ss_diag *d) {
   const int n = o->n_phases;
   for (int k = 0; k < n; k++) {
     if (!(o->durations[k] > 0)) {
-      violate(o, "duration", o->durations[k], k, 0);
+      violate(o, SS_MARGIN_DURATION, o->durations[k], k, 0);
       return ss__fail(d, SS_INFEASIBLE, "durations", o->durations[k],
                       "phase %d (%s) has a non-positive duration %.6g", k,
                       ss_mode_name(o->modes[k]), o->durations[k]);
@@ -485,7 +485,7 @@ static int phase_event(ss_orbit *o, ss_sim *sim, int k, double t0k,
   ss_mode mode = o->modes[k];
   int rc = ss_sim_next_event(sim, ss_sim_time(sim) + tau + slack, ev);
   if (rc == SS_HORIZON) {
-    violate(o, "phase_end", g_end, k, tau);
+    violate(o, SS_MARGIN_PHASE_END, g_end, k, tau);
     return ss__fail(d, SS_INFEASIBLE, "phases", tau,
                     "phase %d (%s) does not end at its duration %.9g: its "
                     "switching function does not reach zero",
@@ -494,7 +494,7 @@ static int phase_event(ss_orbit *o, ss_sim *sim, int k, double t0k,
   if (rc)
     return ss__fail(d, rc, "phases", tau, "event search failed");
   if (ev->kind == SS_EVENT_GRAZING) {
-    violate(o, "grazing", 0, k, ev->t - t0k);
+    violate(o, SS_MARGIN_GRAZING, 0, k, ev->t - t0k);
     check_fail(d,
                "phase %d (%s) touches its switching surface tangentially at "
                "t = %.9g (duration %.9g): a grazing orbit",
@@ -505,7 +505,7 @@ static int phase_event(ss_orbit *o, ss_sim *sim, int k, double t0k,
     return ss__fail(d, SS_EBUG, "phases", k, "mode mismatch");
   /* compare the end time, measured from the start of the run */
   if (ev->t < t_expect - slack * (k + 1)) {
-    violate(o, "ends_early", ev->t - t_expect, k, ev->t - t0k);
+    violate(o, SS_MARGIN_ENDS_EARLY, ev->t - t_expect, k, ev->t - t0k);
     check_fail(d,
                "phase %d (%s) ends early, at its first crossing t = %.9g "
                "instead of %.9g",
@@ -524,7 +524,7 @@ static int phase_transversal(ss_orbit *o, int k, double g_end, double g_slope,
   double tau = o->durations[k];
   ss_mode mode = o->modes[k];
   if (!(g_slope > 0)) {
-    violate(o, "transversality", g_slope, k, tau);
+    violate(o, SS_MARGIN_TRANSVERSALITY, g_slope, k, tau);
     check_fail(d,
                "phase %d (%s) meets its end with the switching function's "
                "slope %.3g <= 0: it crossed zero before, so it ends early "
@@ -550,7 +550,7 @@ static int phase_switching(const ss_model *m, ss_orbit *o, int k, ss_mode want,
   if (mode != SS_MODE_STICK)
     margin_set(&o->switching, sw, k, tau);
   if (ev->to != want) {
-    violate(o, "switching", mode == SS_MODE_STICK ? 0 : fmin(sw, 0), k, tau);
+    violate(o, SS_MARGIN_SWITCHING, mode == SS_MODE_STICK ? 0 : fmin(sw, 0), k, tau);
     if (mode == SS_MODE_SLIP && want == SS_MODE_OVERSHOOT)
       check_fail(d,
                  "the solution violates (3.2) at the end of slip (phase %d, "
@@ -663,7 +663,7 @@ int ss_orbit_solve(const ss_model *m, int n, const ss_mode *modes,
   ss_stab_opts so = {o->n_turns, opts && opts->difference_check};
   rc = ss_stability(m, n, o->modes, o->durations, o->z0, &so, &o->stab);
   if (rc == SS_ESINGULAR) {
-    violate(o, "grazing", 0, -1, 0);
+    violate(o, SS_MARGIN_GRAZING, 0, -1, 0);
     return ss__fail(d, SS_INFEASIBLE, "orbit", 0,
                     "a phase of the orbit ends tangentially (grazing)");
   }

@@ -1,7 +1,9 @@
 /*
- * params.c: parameter validation and unit conversion (DESIGN.md section 1).
+ * params.c: parameter validation, unit conversion (DESIGN.md section 1) and
+ * the parameters' names.
  */
 #include <math.h>
+#include <string.h>
 
 #include "internal.h"
 
@@ -86,4 +88,60 @@ void ss_from_physical(double omega, double t_phys, const double x_phys[4],
     x_out[2] = x_phys[2] / omega;
     x_out[3] = x_phys[3] / omega;
   }
+}
+
+#define NAME_STRING(name) #name,
+static const char *const PARAM_NAMES[] = {SS_PARAM_NAMES(NAME_STRING)};
+static const char *const PHYS_NAMES[] = {SS_PHYS_NAMES(NAME_STRING)};
+#undef NAME_STRING
+enum {
+  N_PARAMS = sizeof PARAM_NAMES / sizeof PARAM_NAMES[0],
+  N_PHYS = sizeof PHYS_NAMES / sizeof PHYS_NAMES[0]
+};
+
+const char *ss_param_name(ss_param_id id) {
+  return (unsigned)id < N_PARAMS ? PARAM_NAMES[id] : NULL;
+}
+
+int ss_param_by_name(const char *name, ss_param_id *id) {
+  for (int i = 0; name && id && i < N_PARAMS; i++)
+    if (!strcmp(name, PARAM_NAMES[i])) {
+      *id = (ss_param_id)i;
+      return SS_OK;
+    }
+  return SS_EINVAL;
+}
+
+const char *ss_phys_name(ss_phys_id id) {
+  return (unsigned)id < N_PHYS ? PHYS_NAMES[id] : NULL;
+}
+
+int ss_phys_by_name(const char *name, ss_phys_id *id) {
+  for (int i = 0; name && id && i < N_PHYS; i++)
+    if (!strcmp(name, PHYS_NAMES[i])) {
+      *id = (ss_phys_id)i;
+      return SS_OK;
+    }
+  return SS_EINVAL;
+}
+
+double *ss__phys_ref(ss_physical *ph, ss_phys_id id) {
+  double *v[] = {&ph->m1, &ph->m2, &ph->k1, &ph->k2, &ph->Fs, &ph->Fr, &ph->v0};
+  return (unsigned)id < N_PHYS ? v[id] : NULL;
+}
+
+double *ss__param_ref(ss_params *p, ss_param_id id) {
+  switch (id) {
+  case SS_PARAM_CHI:
+    return &p->chi;
+  case SS_PARAM_ETA:
+    return &p->eta;
+  case SS_PARAM_US:
+    return &p->us;
+  case SS_PARAM_UR:
+    return &p->ur;
+  case SS_PARAM_V:
+    return &p->V;
+  }
+  return NULL;
 }

@@ -34,6 +34,21 @@ const char *ss_status_name(int status) {
   }
 }
 
+const char *ss_margin_name(ss_margin_id id) {
+  static const char *const NAMES[] = {"",
+                                      "slip_below_V",
+                                      "overshoot_above_V",
+                                      "stick_below_ur",
+                                      "stick_above_minus_ur",
+                                      "switching",
+                                      "transversality",
+                                      "duration",
+                                      "phase_end",
+                                      "grazing",
+                                      "ends_early"};
+  return (unsigned)id < sizeof NAMES / sizeof NAMES[0] ? NAMES[id] : NULL;
+}
+
 void ss_diag_clear(ss_diag *d) {
   if (d)
     memset(d, 0, sizeof *d);

@@ -139,7 +139,7 @@ static void test_ur_family(void) {
   ASSERT_EQ_INT(b.n_special, 1);
   const ss_special *g = &b.special[0];
   ASSERT_EQ_INT((int)g->kind, (int)SS_SPECIAL_GRAZING);
-  ASSERT_TRUE(!strcmp(g->margin, "switching"));
+  ASSERT_TRUE(g->margin == SS_MARGIN_SWITCHING);
   ASSERT_EQ_INT(g->at.min_margin.phase, 0);
   ASSERT_TRUE(g->precision <= 1e-10);
   ASSERT_TRUE(g->value == b.points[0].value);
@@ -359,8 +359,7 @@ static void test_grazing_curve(void) {
   ss_curve cv;
   ss_diag d;
   ss_diag_clear(&d);
-  ASSERT_EQ_INT(ss_continue_grazing(&PAPER, &b, &b.special[0], SS_PARAM_UR, 0.3,
-                                    1.5, &o2, &cv, &d),
+  ASSERT_EQ_INT(ss_continue_grazing(&PAPER, &b, &b.special[0], &o2, &cv, &d),
                 SS_OK);
   ASSERT_TRUE(cv.n_points > 20);
   ASSERT_TRUE(cv.points[cv.start].v2 == PAPER.chi);
@@ -439,12 +438,10 @@ static void test_grazing_curve(void) {
   /* only a switching grazing can be followed */
   ss_special other = b.special[0];
   other.kind = SS_SPECIAL_PERIOD_DOUBLING;
-  ASSERT_EQ_INT(ss_continue_grazing(&PAPER, &b, &other, SS_PARAM_UR, 0.3, 1.5,
-                                    &o2, &cv, NULL),
+  ASSERT_EQ_INT(ss_continue_grazing(&PAPER, &b, &other, &o2, &cv, NULL),
                 SS_EINVAL);
   o2.param = SS_PARAM_UR; /* the same parameter twice */
-  ASSERT_EQ_INT(ss_continue_grazing(&PAPER, &b, &b.special[0], SS_PARAM_UR, 0.3,
-                                    1.5, &o2, &cv, NULL),
+  ASSERT_EQ_INT(ss_continue_grazing(&PAPER, &b, &b.special[0], &o2, &cv, NULL),
                 SS_EINVAL);
   ss_branch_free(&b);
 }
@@ -469,7 +466,7 @@ static void check_beyond(const ss_params *p, ss_param_id id, double lo,
       continue;
     double v;
     ss_attractor a;
-    ASSERT_EQ_INT(ss_beyond_grazing(p, &b, g, id, &v, &a), SS_OK);
+    ASSERT_EQ_INT(ss_beyond_grazing(p, &b, g, &v, &a), SS_OK);
     ASSERT_TRUE(a.found);
     /* on the side where the family does not exist */
     ASSERT_TRUE((v - g->value) * (b.points[b.start].value - g->value) < 0);
@@ -669,8 +666,7 @@ static void test_period_doubling_curve(void) {
     if (pd->kind != SS_SPECIAL_PERIOD_DOUBLING)
       continue;
     ss_curve cv;
-    ASSERT_EQ_INT(ss_continue_period_doubling(&p, &b, pd, SS_PARAM_CHI, 0.01,
-                                              0.99, &o2, &cv, NULL),
+    ASSERT_EQ_INT(ss_continue_period_doubling(&p, &b, pd, &o2, &cv, NULL),
                   SS_OK);
     ASSERT_TRUE(cv.n_points > 10);
     double worst = 0;
@@ -844,12 +840,10 @@ static void test_interior_grazing_curve(void) {
   int curves = 0;
   for (int i = 0; i < b.n_special; i++) {
     const ss_special *g = &b.special[i];
-    if (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "stick_below_ur"))
+    if (g->kind != SS_SPECIAL_GRAZING || g->margin != SS_MARGIN_STICK_BELOW_UR)
       continue;
     ss_curve cv;
-    ASSERT_EQ_INT(ss_continue_grazing(&p, &b, g, SS_PARAM_CHI, 0.01, 0.99, &o2,
-                                      &cv, NULL),
-                  SS_OK);
+    ASSERT_EQ_INT(ss_continue_grazing(&p, &b, g, &o2, &cv, NULL), SS_OK);
     ASSERT_TRUE(cv.n_points > 20);
     if (cv.n_points == 0)
       continue;
@@ -976,7 +970,7 @@ static int tangency_case(const ss_params *p, double pmin, double pmax,
   const ss_special *g = NULL;
   for (int i = 0; i < b.n_special; i++)
     if (b.special[i].kind == SS_SPECIAL_GRAZING &&
-        !strcmp(b.special[i].margin, "transversality"))
+        b.special[i].margin == SS_MARGIN_TRANSVERSALITY)
       g = &b.special[i];
   ASSERT_TRUE(g != NULL);
   if (!g) {
@@ -1002,24 +996,22 @@ static int tangency_case(const ss_params *p, double pmin, double pmax,
     ASSERT_EQ_INT(ss_model_init(&m, &ps, NULL), SS_OK);
     accepted += ss_orbit_solve(&m, b.n_phases, b.modes, g->at.durations, NULL,
                                &o, NULL) == SS_OK;
-    by_slope += !strcmp(o.violation_name, "transversality");
+    by_slope += o.violation_id == SS_MARGIN_TRANSVERSALITY;
   }
   ASSERT_EQ_INT(accepted, 0);
   /* past it, what the motion does (where asked: an attractor of its own) */
   double past;
   ss_attractor att;
-  ASSERT_EQ_INT(ss_beyond_grazing(p, &b, g, SS_PARAM_UR, &past, &att), SS_OK);
+  ASSERT_EQ_INT(ss_beyond_grazing(p, &b, g, &past, &att), SS_OK);
   ASSERT_TRUE(!attractor || att.found || att.perpetual_slip);
   memset(&o2, 0, sizeof o2);
   o2.param = SS_PARAM_CHI;
   o2.lo = chi_lo;
   o2.hi = chi_hi;
   o2.max_points = 400;
-  ASSERT_EQ_INT(
-      ss_continue_grazing(p, &b, g, SS_PARAM_UR, co.lo, co.hi, &o2, cv, NULL),
-      SS_OK);
+  ASSERT_EQ_INT(ss_continue_grazing(p, &b, g, &o2, cv, NULL), SS_OK);
   ASSERT_TRUE(cv->n_points > 20);
-  ASSERT_TRUE(!strcmp(cv->margin, "transversality"));
+  ASSERT_TRUE(cv->margin == SS_MARGIN_TRANSVERSALITY);
   int sides = 0;
   double worst = 0, located = NAN;
   for (int j = 0; j < cv->n_points; j++) {
@@ -1108,7 +1100,8 @@ static void test_transversality_curve(void) {
     ASSERT_EQ_INT(ss_continue(&q, &found[i], &co, &b, NULL), SS_OK);
     for (int k = 0; k < b.n_special; k++) {
       const ss_special *g = &b.special[k];
-      if (g->kind != SS_SPECIAL_GRAZING || strcmp(g->margin, "transversality"))
+      if (g->kind != SS_SPECIAL_GRAZING ||
+          g->margin != SS_MARGIN_TRANSVERSALITY)
         continue;
       seen++;
       ASSERT_TRUE(g->at.min_margin.value > 0.05);
@@ -1117,8 +1110,7 @@ static void test_transversality_curve(void) {
       o2.param = SS_PARAM_CHI;
       o2.lo = 0.05;
       o2.hi = 0.2;
-      ASSERT_TRUE(ss_continue_grazing(&q, &b, g, SS_PARAM_UR, co.lo, co.hi, &o2,
-                                      &cv, NULL) != SS_OK);
+      ASSERT_TRUE(ss_continue_grazing(&q, &b, g, &o2, &cv, NULL) != SS_OK);
       ss_curve_free(&cv);
     }
     ss_branch_free(&b);
