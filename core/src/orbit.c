@@ -550,7 +550,8 @@ static int phase_switching(const ss_model *m, ss_orbit *o, int k, ss_mode want,
   if (mode != SS_MODE_STICK)
     margin_set(&o->switching, sw, k, tau);
   if (ev->to != want) {
-    violate(o, SS_MARGIN_SWITCHING, mode == SS_MODE_STICK ? 0 : fmin(sw, 0), k, tau);
+    violate(o, SS_MARGIN_SWITCHING, mode == SS_MODE_STICK ? 0 : fmin(sw, 0), k,
+            tau);
     if (mode == SS_MODE_SLIP && want == SS_MODE_OVERSHOOT)
       check_fail(d,
                  "the solution violates (3.2) at the end of slip (phase %d, "
