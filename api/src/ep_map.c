@@ -354,11 +354,11 @@ static void w_orbit(api_wbuf *w, const ss_map_orbit *o, unsigned mask,
     case F_MULTIPLIERS:
       API_W_LIT(w, "[");
       for (int i = 0; i < 2; i++) {
-        API_W_LIT(w, "{\"re\":");
+        API_W_LIT(w, "[");
         api__w_real(w, o->eig_re[i]);
-        API_W_LIT(w, ",\"im\":");
+        API_W_LIT(w, ",");
         api__w_real(w, o->eig_im[i]);
-        API_W_LIT(w, i ? "}" : "},");
+        API_W_LIT(w, i ? "]" : "],");
       }
       API_W_LIT(w, "]");
       break;
