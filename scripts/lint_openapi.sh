@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The contract (api/openapi.yaml) linted by @redocly/cli, pinned in
+# The contract (api/openapi.json) linted by @redocly/cli, pinned in
 # api/lint/package-lock.json: the recommended rules with warnings as errors
 # (api/redocly.yaml), less the findings kept with a reason in
 # api/.redocly.lint-ignore.yaml.  scripts/setup.sh --test installs the
@@ -12,4 +12,4 @@ if [ ! -x "$redocly" ] || ! command -v node >/dev/null; then
   exit 77
 fi
 export REDOCLY_TELEMETRY=off REDOCLY_SUPPRESS_UPDATE_NOTICE=true
-exec "$redocly" lint --config redocly.yaml --format stylish openapi.yaml
+exec "$redocly" lint --config redocly.yaml --format stylish openapi.json

@@ -9,7 +9,9 @@
 #                     node and npm for the contract's linter (the pinned
 #                     @redocly/cli of api/lint) and the explorer's browser
 #                     test (chromium, driven by the pinned puppeteer-core of
-#                     tests/browser; both from the npm registry);
+#                     tests/browser), and the generated client's test (the
+#                     pinned openapi-typescript and typescript of
+#                     tests/typescript); those from the npm registry;
 #                     without them those tests are skipped, so as another
 #                     user their absence is only said
 set -euo pipefail
@@ -25,7 +27,8 @@ missing=()
 for p in "${pkgs[@]}" "${extras[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
-# the contract's linter, at the version api/lint/package-lock.json pins
+# the contract's linter, the browser test's driver and the generated
+# client's tools, at the versions their package-lock.json pin
 lint_tools() {
   if [ "${1:-}" = --test ] && command -v npm >/dev/null &&
     [ ! -x api/lint/node_modules/.bin/redocly ]; then
@@ -35,6 +38,11 @@ lint_tools() {
     [ ! -d tests/browser/node_modules/puppeteer-core ]; then
     (cd tests/browser && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund \
       --ignore-scripts --loglevel=error)
+  fi
+  if [ "${1:-}" = --test ] && command -v npm >/dev/null &&
+    [ ! -x tests/typescript/node_modules/.bin/tsc ]; then
+    (cd tests/typescript && npm ci --no-audit --no-fund --ignore-scripts \
+      --loglevel=error)
   fi
 }
 if [ ${#missing[@]} -eq 0 ]; then

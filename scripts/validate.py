@@ -4,16 +4,16 @@
   python3 scripts/validate.py PATH/stickslipd
 
 Starts the daemon on a free port and sends it every request the repository
-holds: each request example of api/openapi.yaml, each codec case of
+holds: each request example of api/openapi.json, each codec case of
 tests/api/cases (success and problem alike, to the endpoint its name
 starts with), and a GET of each GET endpoint, plus an unknown path and a
 wrong method.  Each answer's status must be one the contract lists for that
 path (or a problem status of its "default"), its Content-Type the one listed
 there, and its JSON body valid under the listed schema (JSON Schema 2020-12,
-as OpenAPI 3.1 uses, with the document's $refs), by the python3-jsonschema
+as OpenAPI 3.1 and 3.2 use, with the document's $refs), by the python3-jsonschema
 validator; every answer must carry X-Request-Id (a 405 Allow, a 503
 Retry-After).  NDJSON answers are checked line by line, each line under the
-x-line-schema of the media type.  Two requests with smuggling framing check
+itemSchema of the media type (OpenAPI 3.2).  Two requests with smuggling framing check
 the 400 every path may give.  Exit 0 when
 every answer is valid; 77 when jsonschema is not installed.
 """
@@ -88,8 +88,7 @@ def send_raw(base, head):
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
-    spec_text = open(os.path.join(ROOT, "api", "openapi.yaml")).read()
-    spec = json.loads(spec_text.replace("@SS_VERSION@", "0.0.0"))
+    spec = json.load(open(os.path.join(ROOT, "api", "openapi.json")))
     # the document as the root of its own $refs
     registry_root = spec
     paths = spec["paths"]
@@ -153,8 +152,8 @@ def main():
                     bad.append(where + ": %s not in the contract (%s)" %
                                (media, ", ".join(content)))
                     continue
-                # an NDJSON answer: each line under the line schema
-                schema = content[media].get("x-line-schema",
+                # an NDJSON answer: each line under the item schema
+                schema = content[media].get("itemSchema",
                                             content[media].get("schema", {}))
             if not ("json" in ctype):
                 checked += 1  # text (the metrics): its media type is checked

@@ -5,7 +5,7 @@
  * libstickslip, and turns the result into a response body.  It knows JSON
  * (jansson) but not HTTP transport: the server routes a method and a path to
  * an endpoint of the table (api_route), hands it the body, and gets back a
- * status code, a media type and a body.  The contract is api/openapi.yaml.
+ * status code, a media type and a body.  The contract is api/openapi.json.
  *
  * Errors are RFC 9457 problem details (application/problem+json):
  *   {"type", "title", "status", "detail", "pointer"?, "limit"?, "limit_value"?}
@@ -227,7 +227,7 @@ int api_problem_status(api_problem_kind kind);
 void api_problem(api_response *out, api_problem_kind kind, const char *detail,
                  const char *pointer, const char *limit, double limit_value);
 
-/** The OpenAPI document (api/openapi.yaml, which is written in JSON syntax). */
+/** The OpenAPI document (api/openapi.json, with the project's version). */
 const char *api_openapi_json(void);
 
 /** The explorer's embedded files (api/explorer): "index.html", "app.js" or

@@ -3,7 +3,7 @@
  *
  * One row per endpoint: its name, method, path, metrics label, run class,
  * and the four functions that serve it.  Routing (api_route), the server's
- * metrics, the codec case runner and the check of api/openapi.yaml all read
+ * metrics, the codec case runner and the check of api/openapi.json all read
  * this table through api_endpoint_at(); nothing else lists endpoints.
  *
  * An endpoint is served as decode -> run -> encode:
@@ -17,7 +17,7 @@
  * (GET) endpoint there is no body: decode and run may do nothing.
  *
  * Adding an endpoint: write api/src/ep_<name>.c with its four functions,
- * add its row here and its path to api/openapi.yaml (a test checks that the
+ * add its row here and its path to api/openapi.json (a test checks that the
  * two agree).
  */
 #ifndef SS_API_ENDPOINTS_H

@@ -349,15 +349,15 @@ static void w_orbit(api_wbuf *w, const ss_map_orbit *o, unsigned mask,
       API_W_LIT(w, "}");
       break;
     case F_MULTIPLIERS:
-      API_W_LIT(w, "[");
-      for (int i = 0; i < 2; i++) {
-        API_W_LIT(w, "{\"re\":");
-        api__w_real(w, o->eig_re[i]);
-        API_W_LIT(w, ",\"im\":");
-        api__w_real(w, o->eig_im[i]);
-        API_W_LIT(w, i ? "}" : "},");
-      }
-      API_W_LIT(w, "]");
+      API_W_LIT(w, "[[");
+      api__w_real(w, o->eig_re[0]);
+      API_W_LIT(w, ",");
+      api__w_real(w, o->eig_im[0]);
+      API_W_LIT(w, "],[");
+      api__w_real(w, o->eig_re[1]);
+      API_W_LIT(w, ",");
+      api__w_real(w, o->eig_im[1]);
+      API_W_LIT(w, "]]");
       break;
     case F_MARGINAL:
       if (o->marginal)

@@ -1,7 +1,7 @@
 /*
  * test_endpoints.c: the endpoint table against the OpenAPI document and the
  * codec cases.  Every row of the table is a path and method of
- * api/openapi.yaml and every path and method there is a row; labels are
+ * api/openapi.json and every path and method there is a row; labels are
  * unique; routing finds each row, refuses another method with 405 and an
  * unknown path with 404; every computing endpoint has codec cases.
  * Usage: test_endpoints CASES_DIR
@@ -34,7 +34,7 @@ static void test_spec_and_table(void) {
     method[k] = 0;
     json_t *item = json_object_get(paths, row->path);
     if (!json_object_get(item, method))
-      TEST_FAIL_("%s %s is in the table but not in openapi.yaml", row->method,
+      TEST_FAIL_("%s %s is in the table but not in openapi.json", row->method,
                  row->path);
     for (size_t j = 0; j < i; j++)
       if (!strcmp(api_endpoint_at(j)->label, row->label) ||
@@ -65,7 +65,7 @@ static void test_spec_and_table(void) {
         method[k] = (char)toupper((unsigned char)m[k]);
       method[k] = 0;
       if (api_route(method, path, &got) != 200)
-        TEST_FAIL_("%s %s is in openapi.yaml but not in the table", method,
+        TEST_FAIL_("%s %s is in openapi.json but not in the table", method,
                    path);
       in_spec++;
     }
@@ -123,7 +123,7 @@ static void test_problem_table(void) {
     for (size_t i = 0; type && i < json_array_size(types); i++)
       found |= !strcmp(type, json_string_value(json_array_get(types, i)));
     if (!found)
-      TEST_FAIL_("problem type %s is not in openapi.yaml", type ? type : "?");
+      TEST_FAIL_("problem type %s is not in openapi.json", type ? type : "?");
     test_checks_++;
     ASSERT_EQ_INT(r.status, api_problem_status((api_problem_kind)k));
     json_decref(body);
