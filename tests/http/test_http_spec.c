@@ -43,7 +43,7 @@ static json_t *ndjson_sorted(const char *t) {
   return a;
 }
 
-/* EVIDENCE: README "HTTP API": the contract is api/openapi.yaml, served at
+/* EVIDENCE: README "HTTP API": the contract is api/openapi.json, served at
  * GET /openapi.json.  That its examples are what the daemon answers is not
  * stated in README; this test replays them. */
 static void test_spec_examples(void) {
