@@ -4,7 +4,8 @@
  *   daemon.c   start and stop: listening, descriptors, the daemon's info
  *   request.c  a request: admission, body, the pool's side, completion
  *   reply.c    answers: headers, CORS, gzip, streams, problems, the budget
- *   batch.c    POST /batch: items in the pool, lines streamed as done
+ *   batch.c    POST /batch: body parsed, and items run, in the pool; lines
+ *              streamed as done
  *   monitor.c  connections: tracking, slow clients, peers gone away
  */
 #ifndef SS_SERVER_INTERNAL_H
@@ -100,6 +101,7 @@ typedef struct srv__req {
   char path[96];
   char key[SRV_CLIENT_KEY]; /* the client, for the pool's queues */
   api_response ar;
+  api_batch *ab;     /* a POST /batch's items, parsed on a worker */
   srv__batch *batch; /* a POST /batch being answered */
   /* An answer decided on the first call, sent on a later one: libmicrohttpd
    * handles a response queued during the first call of a request far more
@@ -175,7 +177,10 @@ void srv__budget_problem(struct srv_daemon *d, api_response *ar);
 
 /* ---- batch.c ------------------------------------------------------------- */
 
-/* The body of a POST /batch is in: check it, and start the answer. */
+/* On a worker: parse and check the body of a POST /batch, into r->ab (its
+ * bytes held by @a r), or its problem into r->ar. */
+void srv__batch_open(srv__req *r);
+/* Back on the I/O thread with r->ab: start the answer. */
 enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
                                  srv__req *r);
 /* The request of a batch has completed: what is still in the pool stops.

@@ -18,7 +18,10 @@
  * round robin, a bounded queue per client, at most client_workers running
  * per client), and resumed with its answer by the worker that computed it.
  * What needs no computing (the api's inline endpoints, and every refusal)
- * is answered on the I/O thread at once.  POST /batch is batch.c's.
+ * is answered on the I/O thread at once.  POST /batch is batch.c's: its
+ * body is parsed in the pool too, and its answer started when the request
+ * is resumed.  Nothing whose work grows with the body runs on the I/O
+ * thread, which only collects the bytes.
  *
  * Completion.  Metrics, one line of access log, and the connection's
  * deadline for its next request.
@@ -383,6 +386,8 @@ static void job_run(srv_job *j) {
   srv__req *r = (srv__req *)j;
   if (srv__over_budget(r->d))
     srv__budget_problem(r->d, &r->ar);
+  else if (api_endpoint_at(r->ep)->run_class == API_RUN_BATCH)
+    srv__batch_open(r);
   else
     handle(r->d, r, &r->ar);
   /* the answer counts from now on, not from when it is sent */
@@ -398,6 +403,10 @@ static void job_run(srv_job *j) {
 /* Back to the I/O thread with an answer: the pool is done with the job. */
 static void job_done(srv_job *j) {
   srv__req *r = (srv__req *)j;
+  if (j->state != SRV_JOB_DONE) {
+    api_batch_free(r->ab); /* a batch's items not to be run */
+    r->ab = NULL;
+  }
   if (j->state == SRV_JOB_CANCELLED) {
     api_response_free(&r->ar);
     api_problem(&r->ar, API_P_CLIENT_CLOSED, "the client went away", NULL, NULL,
@@ -440,8 +449,8 @@ static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
 }
 
 /* The body of a computation is in: refused at once while the daemon shuts
- * down or the memory budget is spent; else a batch starts its answer, and
- * any other request goes to the pool. */
+ * down or the memory budget is spent; else it goes to the pool (a batch's
+ * body to be parsed there). */
 static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
                                srv__req *r) {
   if (atomic_load(&d->draining))
@@ -452,8 +461,6 @@ static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
     srv__budget_problem(d, &ar);
     return srv__send_api(c, r, &ar, NULL);
   }
-  if (api_endpoint_at(r->ep)->run_class == API_RUN_BATCH)
-    return srv__batch_start(d, c, r);
   return submit(d, c, r);
 }
 
@@ -482,7 +489,8 @@ enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
     return MHD_YES;
   }
   if (r->answered) /* resumed by the pool */
-    return srv__send_api(c, r, &r->ar, NULL);
+    return r->ab ? srv__batch_start(d, c, r)
+                 : srv__send_api(c, r, &r->ar, NULL);
   if (r->done || r->p_status) {
     /* an answer is decided: discard whatever body still comes */
     if (*upload_data_size || r->done) {
@@ -610,6 +618,7 @@ void srv__completed(void *cls, struct MHD_Connection *c, void **con_cls,
   srv__receiving(d, r->cn, 1);
   srv_metrics_held(d->metrics, -r->held);
   api_response_free(&r->ar);
+  api_batch_free(r->ab);
   free(r->buf);
   free(r);
   *con_cls = NULL;
