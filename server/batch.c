@@ -62,7 +62,7 @@ struct srv__batch {
 
 static void batch_hold(srv__batch *b, long bytes) {
   b->held += bytes;
-  srv_metrics_held(b->d->metrics, bytes);
+  srv__held(b->d, b->key, bytes);
 }
 
 static void batch_free(srv__batch *b) {
@@ -78,7 +78,7 @@ static void batch_free(srv__batch *b) {
   api_stream_free(b->line);
   free(b->last);
   api_batch_free(b->ab);
-  srv_metrics_held(b->d->metrics, -b->held);
+  srv__held(b->d, b->key, -b->held);
   pthread_mutex_destroy(&b->mu);
   free(b);
 }
@@ -103,8 +103,8 @@ static void item_run(srv_job *j) {
   bitem *it = (bitem *)j;
   srv__batch *b = it->b;
   struct srv_daemon *d = b->d;
-  if (srv__over_budget(d)) {
-    srv__budget_problem(d, &it->ar);
+  if (srv__over_budget(d, b->key)) {
+    srv__budget_problem(d, b->key, &it->ar);
   } else {
     api_server_info info = srv__server_info(d, &it->job);
     api_batch_run(b->ab, it->i, &d->cfg.lim, &info, &it->ar);
@@ -158,9 +158,9 @@ static void item_now(srv__batch *b, bitem *it, api_problem_kind kind,
 }
 
 /* Send items to the pool while fewer than batch_parallel are in flight
- * (under b->mu).  When the client's queue is full or the memory budget is
- * spent, wait for an item in flight to finish; with none in flight, the
- * item is answered 503 as a request would be. */
+ * (under b->mu).  When the client's queue is full or the memory budget (or
+ * the client's share of it) is spent, wait for an item in flight to finish;
+ * with none in flight, the item is answered 503 as a request would be. */
 static void dispatch(srv__batch *b) {
   struct srv_daemon *d = b->d;
   while (!atomic_load(&b->gone) && b->next < b->n &&
@@ -174,12 +174,12 @@ static void dispatch(srv__batch *b) {
     int rc;
     if (atomic_load(&d->draining)) {
       item_now(b, it, API_P_SHUTTING_DOWN, "the server is shutting down");
-    } else if (srv__over_budget(d)) {
+    } else if (srv__over_budget(d, b->key)) {
       if (b->in_flight > 0) {
         free(it);
         return;
       }
-      srv__budget_problem(d, &it->ar);
+      srv__budget_problem(d, b->key, &it->ar);
       item_ready(b, it);
     } else if ((rc = srv_pool_submit(d->pool, &it->job, b->key)) != 0) {
       if (rc == SRV_POOL_FULL && b->in_flight > 0) {
