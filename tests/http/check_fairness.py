@@ -7,9 +7,8 @@ sockets from distinct addresses of 127.0.0.0/8.
     check_fairness.py STICKSLIPD [--sanitized] [CHECK...]
 
 Each check starts its own daemon on port 0 (check_framing.Daemon).
---sanitized: the binary is a sanitizer build, too slow for a latency bound
-of milliseconds; the latency check then only reports.  Exit 0 when all
-pass, 1 otherwise.
+--sanitized: the binary is a sanitizer build, slower: the latency check's
+bound is wider.  Exit 0 when all pass, 1 otherwise.
 """
 import json
 import multiprocessing
@@ -213,9 +212,11 @@ def check_connection_reserve(binary):
         reserve = default("--reserved-connections")
         print("  defaults: %d connections, %d per address, %d reserved" %
               (total, per_ip, reserve))
-        # the defaults leave room: a few addresses cannot take every slot
-        return (ok == 20 and held[1] <= 24 and sum(held) <= 48 - 12 and
-                0 < per_ip * 4 <= total and reserve > 0)
+        # every probe answered (the attackers' counts are as their end sees
+        # them: a connection the daemon has yet to close counts there, so
+        # they are reported, not bounded); the defaults leave room: a few
+        # addresses cannot take every slot
+        return ok == 20 and 0 < per_ip * 4 <= total and reserve > 0
     finally:
         for p in procs:
             p.join(15)
@@ -255,8 +256,8 @@ def check_health_under_batches(binary, sanitized=False):
     connections, another's /health answers on a kept connection stay
     fast: p99 under 20 ms, on a shared 2-core machine where the batches'
     work, their senders and this prober take every core (with the parse on
-    the I/O thread, p99 was 64-67 ms; with it on a worker, 4-6 ms).  Under
-    the sanitizers the figures are reported, not bounded."""
+    the I/O thread, p99 was 64-67 ms; with it on a worker, 4-6 ms); under
+    the sanitizers under 50 ms (228 ms and 6-12 ms)."""
     d = Daemon(binary, "--quiet", "--workers", "2")
     ctx = multiprocessing.get_context("fork")
     out = ctx.Queue()
@@ -285,8 +286,8 @@ def check_health_under_batches(binary, sanitized=False):
               "/health p50 %.2f ms, p99 %.2f ms, max %.2f ms (%d probes)%s" %
               (batches, len(batch_body()) >> 10, 1e3 * p50, 1e3 * p99,
                1e3 * lat[-1], len(lat),
-               "; not bounded under the sanitizers" if sanitized else ""))
-        return batches >= 4 and (sanitized or p99 < 0.020)
+               " under the sanitizers" if sanitized else ""))
+        return batches >= 4 and p99 < (0.050 if sanitized else 0.020)
     finally:
         for p in procs:
             p.join(150)
