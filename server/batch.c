@@ -1,7 +1,10 @@
 /*
- * batch.c: POST /batch: its items computed in the pool, its answer streamed
- * a line per item as each is done.
+ * batch.c: POST /batch: its body parsed and its items computed in the
+ * pool, its answer streamed a line per item as each is done.
  *
+ * The body is parsed on a worker (srv__batch_open, a job of the batch's
+ * client), and the I/O thread starts the answer when the pool resumes the
+ * request with the items (srv__batch_start).
  * A batch's answer is one chunked response whose lines are written as its
  * items are done.  Its items are jobs of the pool like any request, in the
  * queue of the batch's client; at most batch_parallel of them are in flight
@@ -59,7 +62,7 @@ struct srv__batch {
 
 static void batch_hold(srv__batch *b, long bytes) {
   b->held += bytes;
-  srv_metrics_held(b->d->metrics, bytes);
+  srv__held(b->d, b->key, bytes);
 }
 
 static void batch_free(srv__batch *b) {
@@ -75,7 +78,7 @@ static void batch_free(srv__batch *b) {
   api_stream_free(b->line);
   free(b->last);
   api_batch_free(b->ab);
-  srv_metrics_held(b->d->metrics, -b->held);
+  srv__held(b->d, b->key, -b->held);
   pthread_mutex_destroy(&b->mu);
   free(b);
 }
@@ -100,8 +103,8 @@ static void item_run(srv_job *j) {
   bitem *it = (bitem *)j;
   srv__batch *b = it->b;
   struct srv_daemon *d = b->d;
-  if (srv__over_budget(d)) {
-    srv__budget_problem(d, &it->ar);
+  if (srv__over_budget(d, b->key)) {
+    srv__budget_problem(d, b->key, &it->ar);
   } else {
     api_server_info info = srv__server_info(d, &it->job);
     api_batch_run(b->ab, it->i, &d->cfg.lim, &info, &it->ar);
@@ -155,9 +158,9 @@ static void item_now(srv__batch *b, bitem *it, api_problem_kind kind,
 }
 
 /* Send items to the pool while fewer than batch_parallel are in flight
- * (under b->mu).  When the client's queue is full or the memory budget is
- * spent, wait for an item in flight to finish; with none in flight, the
- * item is answered 503 as a request would be. */
+ * (under b->mu).  When the client's queue is full or the memory budget (or
+ * the client's share of it) is spent, wait for an item in flight to finish;
+ * with none in flight, the item is answered 503 as a request would be. */
 static void dispatch(srv__batch *b) {
   struct srv_daemon *d = b->d;
   while (!atomic_load(&b->gone) && b->next < b->n &&
@@ -171,12 +174,12 @@ static void dispatch(srv__batch *b) {
     int rc;
     if (atomic_load(&d->draining)) {
       item_now(b, it, API_P_SHUTTING_DOWN, "the server is shutting down");
-    } else if (srv__over_budget(d)) {
+    } else if (srv__over_budget(d, b->key)) {
       if (b->in_flight > 0) {
         free(it);
         return;
       }
-      srv__budget_problem(d, &it->ar);
+      srv__budget_problem(d, b->key, &it->ar);
       item_ready(b, it);
     } else if ((rc = srv_pool_submit(d->pool, &it->job, b->key)) != 0) {
       if (rc == SRV_POOL_FULL && b->in_flight > 0) {
@@ -352,14 +355,21 @@ size_t srv__batch_detach(srv__batch *b) {
   return sent;
 }
 
-/* The body of a POST /batch is in (and the daemon takes computations): check
- * it, and start the answer. */
+/* The parse of a body of up to --max-body grows with it (tens of
+ * milliseconds for a megabyte): a job of the batch's client in the pool,
+ * like a computation, so that the I/O thread only collects the bytes. */
+void srv__batch_open(srv__req *r) {
+  if (api_batch_open(r->buf, r->len, &r->d->cfg.lim, &r->ab, &r->ar) == 0)
+    srv__hold(r->d, r, (long)api_batch_held(r->ab));
+}
+
+/* The body of a POST /batch is parsed (r->ab, which the batch takes over):
+ * start the answer. */
 enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
                                  srv__req *r) {
-  api_response ar;
-  api_batch *ab;
-  if (api_batch_open(r->buf, r->len, &d->cfg.lim, &ab, &ar) != 0)
-    return srv__send_api(c, r, &ar, NULL);
+  api_batch *ab = r->ab;
+  r->ab = NULL;
+  srv__hold(d, r, -(long)api_batch_held(ab)); /* the batch's from now on */
   srv__batch *b = calloc(1, sizeof *b);
   if (!b) {
     api_batch_free(ab);
@@ -382,11 +392,6 @@ enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
     batch_hold(b, SRV__GZIP_STATE);
   }
   batch_hold(b, (long)api_batch_held(ab));
-  /* the items keep their own copies of their bodies */
-  free(r->buf);
-  r->buf = NULL;
-  srv__hold(d, r, -(long)r->len);
-  r->len = r->cap = 0;
   struct MHD_Response *resp = MHD_create_response_from_callback(
       MHD_SIZE_UNKNOWN, SRV__STREAM_CHUNK, batch_reader, b, batch_release);
   if (!resp) {

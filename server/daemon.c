@@ -105,6 +105,8 @@ static void daemon_free(struct srv_daemon *d) {
   }
   srv_pool_free(d->pool);
   srv_metrics_free(d->metrics);
+  srv__tally_free(d->held);
+  srv__tally_free(d->conns);
   pthread_mutex_destroy(&d->mu);
   free(d->etags);
   free(d);
@@ -141,7 +143,8 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
       snprintf(d->etags[i], sizeof d->etags[i], "\"%016llx\"", h);
   }
   srv_pool_cfg pc = {cfg->workers, cfg->client_workers, cfg->client_queue};
-  if (!(d->metrics = srv_metrics_new()) || !(d->pool = srv_pool_new(&pc))) {
+  if (!(d->metrics = srv_metrics_new()) || !(d->pool = srv_pool_new(&pc)) ||
+      !(d->held = srv__tally_new()) || !(d->conns = srv__tally_new())) {
     daemon_free(d);
     return NULL;
   }
@@ -153,14 +156,15 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     return NULL;
   }
   raise_fd_limit(cfg->max_conn);
-  /* not libmicrohttpd's strict mode: 0.9.75 answers a request without Host
+  /* the limits by address are srv__accept's (libmicrohttpd's own per-IP
+   * limit knows no trusted proxy and no reserve).  Not libmicrohttpd's
+   * strict mode: 0.9.75 answers a request without Host
    * there with its own page, whose header block it writes twice; request.c
    * refuses that, and a space in the target (srv__target), itself */
   d->mhd = MHD_start_daemon(
-      flags, (uint16_t)cfg->port, NULL, NULL, srv__handler, d,
+      flags, (uint16_t)cfg->port, srv__accept, d, srv__handler, d,
       MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss, MHD_OPTION_CONNECTION_LIMIT,
-      cfg->max_conn, MHD_OPTION_PER_IP_CONNECTION_LIMIT, cfg->per_ip,
-      MHD_OPTION_CONNECTION_TIMEOUT, cfg->timeout,
+      cfg->max_conn, MHD_OPTION_CONNECTION_TIMEOUT, cfg->timeout,
       MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)SRV__CONN_MEMORY,
       MHD_OPTION_STRICT_FOR_CLIENT, (int)0, MHD_OPTION_NOTIFY_COMPLETED,
       srv__completed, d, MHD_OPTION_NOTIFY_CONNECTION, srv__connection, d,

@@ -4,8 +4,11 @@
  *   daemon.c   start and stop: listening, descriptors, the daemon's info
  *   request.c  a request: admission, body, the pool's side, completion
  *   reply.c    answers: headers, CORS, gzip, streams, problems, the budget
- *   batch.c    POST /batch: items in the pool, lines streamed as done
- *   monitor.c  connections: tracking, slow clients, peers gone away
+ *   batch.c    POST /batch: body parsed, and items run, in the pool; lines
+ *              streamed as done
+ *   monitor.c  connections: tracking, admission by address, slow clients,
+ *              peers gone away
+ *   tally.c    counts by client: bytes held, connections
  */
 #ifndef SS_SERVER_INTERNAL_H
 #define SS_SERVER_INTERNAL_H
@@ -35,6 +38,22 @@
  * this is answered 413: what is left is kept for the answer's headers. */
 #define SRV__HEADER_ROOM (SRV__CONN_MEMORY - 4096)
 
+/* Once fewer than --reserved-connections slots are free, a new connection
+ * is taken only from an address that holds fewer than this many (a
+ * browser opens up to 6 to a host). */
+#define SRV__FEW_CONNECTIONS 8
+
+/* Counts by client key, under a lock of their own (tally.c). */
+typedef struct srv__tally srv__tally;
+srv__tally *srv__tally_new(void); /* NULL when out of memory */
+void srv__tally_free(srv__tally *t);
+/* Add @a delta to the count of @a key; its new count. */
+long srv__tally_add(srv__tally *t, const char *key, long delta);
+/* The count of @a key; and when not NULL, into *keys the number of keys
+ * whose count is not 0, into *total the sum of all counts. */
+long srv__tally_get(srv__tally *t, const char *key, unsigned *keys,
+                    long *total);
+
 /* One TCP connection, from NOTIFY_CONNECTION's start to its close. */
 typedef struct srv__conn {
   struct srv__conn *prev, *next;
@@ -59,7 +78,7 @@ struct srv_daemon {
   atomic_int draining;
   double started;
   pthread_mutex_t mu; /* the connection list */
-  srv__conn *conns;
+  srv__conn *conn_list;
   pthread_t monitor;
   atomic_int monitor_stop;
   atomic_ulong conns_started; /* taken up by libmicrohttpd */
@@ -68,6 +87,8 @@ struct srv_daemon {
   unsigned long long rid_seed;
   atomic_ullong rid_next;
   char (*etags)[24]; /* per row: a static answer's validator, or "" */
+  srv__tally *held;  /* bytes against the memory budget, by client */
+  srv__tally *conns; /* open connections, by peer address */
 };
 
 typedef struct srv__batch srv__batch;
@@ -100,6 +121,7 @@ typedef struct srv__req {
   char path[96];
   char key[SRV_CLIENT_KEY]; /* the client, for the pool's queues */
   api_response ar;
+  api_batch *ab;     /* a POST /batch's items, parsed on a worker */
   srv__batch *batch; /* a POST /batch being answered */
   /* An answer decided on the first call, sent on a later one: libmicrohttpd
    * handles a response queued during the first call of a request far more
@@ -120,6 +142,9 @@ double srv__now(void); /* monotonic seconds */
 api_server_info srv__server_info(struct srv_daemon *d, srv_job *job);
 
 /* ---- request.c: libmicrohttpd's callbacks for a request ------------------ */
+
+/* Whether the peer @a addr (as text) is a --trusted-proxy. */
+int srv__trusted(const struct srv_daemon *d, const char *addr);
 
 enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
                              const char *url, const char *method,
@@ -168,14 +193,21 @@ void srv__send_raw_problem(srv__req *r, api_problem_kind kind,
 /* Count @a bytes against the memory budget for request @a r (negative to
  * give them back). */
 void srv__hold(struct srv_daemon *d, srv__req *r, long bytes);
-/* Whether the memory budget is spent. */
-int srv__over_budget(const struct srv_daemon *d);
-/* The 503 for a spent memory budget, into @a ar. */
-void srv__budget_problem(struct srv_daemon *d, api_response *ar);
+/* Count @a bytes against the memory budget for the client @a key. */
+void srv__held(struct srv_daemon *d, const char *key, long bytes);
+/* Whether the client @a key may not start work: 0 when it may, else the
+ * budget is spent (1) or the client holds its share of it (2). */
+int srv__over_budget(struct srv_daemon *d, const char *key);
+/* The 503 for srv__over_budget's refusal of client @a key, into @a ar. */
+void srv__budget_problem(struct srv_daemon *d, const char *key,
+                         api_response *ar);
 
 /* ---- batch.c ------------------------------------------------------------- */
 
-/* The body of a POST /batch is in: check it, and start the answer. */
+/* On a worker: parse and check the body of a POST /batch, into r->ab (its
+ * bytes held by @a r), or its problem into r->ar. */
+void srv__batch_open(srv__req *r);
+/* Back on the I/O thread with r->ab: start the answer. */
 enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
                                  srv__req *r);
 /* The request of a batch has completed: what is still in the pool stops.
@@ -184,6 +216,10 @@ size_t srv__batch_detach(srv__batch *b);
 
 /* ---- monitor.c ----------------------------------------------------------- */
 
+/* libmicrohttpd's ACCEPT_POLICY: whether a new connection from @a addr is
+ * taken (--per-ip-connections, --reserved-connections). */
+enum MHD_Result srv__accept(void *cls, const struct sockaddr *addr,
+                            socklen_t addrlen);
 /* libmicrohttpd's NOTIFY_CONNECTION: a connection's start and close. */
 void srv__connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
                      enum MHD_ConnectionNotificationCode toe);

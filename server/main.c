@@ -71,14 +71,17 @@ static const flag FLAGS[] = {
     {"--max-connections", F_UNSIGNED, 1, 65536, CFG(max_conn),
      "open connections"},
     {"--per-ip-connections", F_UNSIGNED, 1, 65536, CFG(per_ip),
-     "open connections per client address"},
+     "open connections per client address (a --trusted-proxy: no limit)"},
+    {"--reserved-connections", F_UNSIGNED, 0, 65536, CFG(reserved),
+     "the last connections, taken only by an address holding fewer than 8"},
     {"--connection-timeout", F_UNSIGNED, 1, 3600, CFG(timeout),
      "idle connection timeout, seconds"},
     {"--drain", F_DOUBLE, 0, 3600, CFG(drain),
      "grace for requests in flight on SIGTERM/SIGINT, seconds"},
     {"--memory-budget", F_SIZE, 1, 1 << 20, CFG(memory_mb),
      "MiB that request bodies and answers in flight may hold; new work "
-     "over it gets 503"},
+     "over it gets 503, and so does a client's over its share: budget / "
+     "(k + 1), k clients holding some"},
 };
 #define N_FLAGS (sizeof FLAGS / sizeof FLAGS[0])
 
@@ -180,7 +183,8 @@ static void defaults(srv_config *cfg) {
   api_limits_default(&cfg->lim);
   cfg->lim.map_threads = 0; /* the workers, once their number is known */
   cfg->max_conn = 2048;
-  cfg->per_ip = 1024;
+  cfg->per_ip = 256;
+  cfg->reserved = 256;
   cfg->timeout = 10;
   long nc = sysconf(_SC_NPROCESSORS_ONLN);
   cfg->workers = nc > 0 ? (unsigned)nc : 1;

@@ -1,6 +1,10 @@
 /*
  * monitor.c: the connections, and the watch over them.
  *
+ * A new connection is taken or refused by its address's count of
+ * connections (srv__accept): a per-address limit, and a reserve of the
+ * last slots for addresses that hold few.
+ *
  * Each TCP connection is on a list from its start to its close, with the
  * time its current request started.  While a connection is suspended
  * libmicrohttpd does not look at its socket, so a monitor thread does,
@@ -27,10 +31,8 @@
 
 /* ---- the connections ----------------------------------------------------- */
 
-static void client_key(struct MHD_Connection *c, char *key, size_t n) {
-  const union MHD_ConnectionInfo *ci =
-      MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
-  const struct sockaddr *sa = ci ? ci->client_addr : NULL;
+/* The key of the address @a sa: its text, or "?". */
+static void address_key(const struct sockaddr *sa, char *key, size_t n) {
   snprintf(key, n, "?");
   if (sa && sa->sa_family == AF_INET)
     inet_ntop(AF_INET, &((const struct sockaddr_in *)sa)->sin_addr, key,
@@ -38,6 +40,12 @@ static void client_key(struct MHD_Connection *c, char *key, size_t n) {
   else if (sa && sa->sa_family == AF_INET6)
     inet_ntop(AF_INET6, &((const struct sockaddr_in6 *)sa)->sin6_addr, key,
               (socklen_t)n);
+}
+
+static void client_key(struct MHD_Connection *c, char *key, size_t n) {
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+  address_key(ci ? ci->client_addr : NULL, key, n);
 }
 
 static int peer_port(struct MHD_Connection *c) {
@@ -51,8 +59,32 @@ static int peer_port(struct MHD_Connection *c) {
   return 0;
 }
 
+/* An address may hold --per-ip-connections; once fewer than
+ * --reserved-connections slots are free (of --max-connections, which
+ * libmicrohttpd enforces), only one holding fewer than
+ * SRV__FEW_CONNECTIONS: two or three addresses that keep every slot they
+ * can get leave the reserve to the others.  A trusted proxy speaks for
+ * many clients: only --max-connections bounds it. */
+enum MHD_Result srv__accept(void *cls, const struct sockaddr *addr,
+                            socklen_t addrlen) {
+  struct srv_daemon *d = cls;
+  char key[SRV_CLIENT_KEY];
+  long total;
+  (void)addrlen;
+  address_key(addr, key, sizeof key);
+  if (srv__trusted(d, key))
+    return MHD_YES;
+  long mine = srv__tally_get(d->conns, key, NULL, &total);
+  if (mine >= (long)d->cfg.per_ip ||
+      (total + (long)d->cfg.reserved >= (long)d->cfg.max_conn &&
+       mine >= SRV__FEW_CONNECTIONS))
+    return MHD_NO;
+  return MHD_YES;
+}
+
 /* libmicrohttpd's NOTIFY_CONNECTION: a connection joins the list at its
- * start, and leaves it at its close. */
+ * start, and leaves it at its close; its address's count of connections
+ * with it. */
 void srv__connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
                      enum MHD_ConnectionNotificationCode toe) {
   struct srv_daemon *d = cls;
@@ -68,22 +100,24 @@ void srv__connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
     cn->receiving = 1;
     client_key(c, cn->key, sizeof cn->key);
     cn->peer_port = peer_port(c);
+    srv__tally_add(d->conns, cn->key, 1);
     pthread_mutex_lock(&d->mu);
-    cn->next = d->conns;
-    if (d->conns)
-      d->conns->prev = cn;
-    d->conns = cn;
+    cn->next = d->conn_list;
+    if (d->conn_list)
+      d->conn_list->prev = cn;
+    d->conn_list = cn;
     pthread_mutex_unlock(&d->mu);
     *socket_ctx = cn;
     return;
   }
   if (!cn)
     return;
+  srv__tally_add(d->conns, cn->key, -1);
   pthread_mutex_lock(&d->mu);
   if (cn->prev)
     cn->prev->next = cn->next;
   else
-    d->conns = cn->next;
+    d->conn_list = cn->next;
   if (cn->next)
     cn->next->prev = cn->prev;
   pthread_mutex_unlock(&d->mu);
@@ -119,7 +153,7 @@ int srv__peer_closed(int fd) {
 static void reap_slow(struct srv_daemon *d) {
   double t = srv__now();
   pthread_mutex_lock(&d->mu);
-  for (srv__conn *cn = d->conns; cn; cn = cn->next)
+  for (srv__conn *cn = d->conn_list; cn; cn = cn->next)
     if (cn->receiving && !cn->shut && t - cn->start > d->cfg.request_timeout) {
       shutdown(cn->fd, SHUT_RDWR);
       cn->shut = 1;
@@ -149,7 +183,7 @@ int srv_connection_watched(struct srv_daemon *d, int fd, int peer_port,
                            srv_conn_state *st) {
   int found = -1;
   pthread_mutex_lock(&d->mu);
-  for (srv__conn *cn = d->conns; cn && found; cn = cn->next)
+  for (srv__conn *cn = d->conn_list; cn && found; cn = cn->next)
     if (fd >= 0 ? cn->fd == fd : cn->peer_port == peer_port) {
       st->receiving = cn->receiving;
       st->shut = cn->shut;

@@ -371,28 +371,66 @@ void srv__send_raw_problem(srv__req *r, api_problem_kind kind,
 
 /* ---- the memory budget ---------------------------------------------------
  *
- * Bodies and answers in flight count against --memory-budget; a request
- * that comes while it is spent is answered 503.
+ * Bodies and answers in flight count against --memory-budget, and against
+ * their client's share of it (the client key of the pool's queues).  A
+ * client may start work while the budget is not spent and it holds less
+ * than budget / (k + 1), k the clients holding some (itself included): a
+ * client alone takes at most half, and with k clients at their shares one
+ * share is still free for a newcomer, so that one address's connections
+ * that never read their answers get the 503s themselves.  A client that
+ * holds nothing is always under its share: every client may have an
+ * answer, however large, while the budget is not spent.
  */
+
+void srv__held(struct srv_daemon *d, const char *key, long bytes) {
+  srv_metrics_held(d->metrics, bytes);
+  srv__tally_add(d->held, key, bytes);
+}
 
 /* Count @a bytes against the memory budget for request @a r (negative to
  * give them back). */
 void srv__hold(struct srv_daemon *d, srv__req *r, long bytes) {
   r->held += bytes;
-  srv_metrics_held(d->metrics, bytes);
+  srv__held(d, r->key, bytes);
 }
 
-int srv__over_budget(const struct srv_daemon *d) {
-  return srv_metrics_held(d->metrics, 0) >= (long)d->cfg.memory_mb << 20;
+/* What client @a key holds, its share, and the clients that hold some. */
+static long share_of(struct srv_daemon *d, const char *key, long *share,
+                     unsigned *clients) {
+  long mine = srv__tally_get(d->held, key, clients, NULL);
+  *share = ((long)d->cfg.memory_mb << 20) / ((long)*clients + 1);
+  return mine;
 }
 
-void srv__budget_problem(struct srv_daemon *d, api_response *ar) {
-  char detail[160];
+int srv__over_budget(struct srv_daemon *d, const char *key) {
+  long share;
+  unsigned clients;
+  if (srv_metrics_held(d->metrics, 0) >= (long)d->cfg.memory_mb << 20)
+    return 1;
+  long mine = share_of(d, key, &share, &clients);
+  return mine > 0 && mine >= share ? 2 : 0;
+}
+
+void srv__budget_problem(struct srv_daemon *d, const char *key,
+                         api_response *ar) {
+  char detail[200];
+  long share;
+  unsigned clients;
   srv_metrics_over_budget(d->metrics);
-  snprintf(detail, sizeof detail,
-           "the answers in flight hold %.1f MiB, the memory budget is %zu "
-           "MiB; retry after a second",
-           (double)srv_metrics_held(d->metrics, 0) / 1048576.0,
-           d->cfg.memory_mb);
+  long mine = share_of(d, key, &share, &clients);
+  if (srv_metrics_held(d->metrics, 0) < (long)d->cfg.memory_mb << 20 &&
+      mine > 0)
+    snprintf(detail, sizeof detail,
+             "this client's answers in flight hold %.1f MiB, its share of "
+             "the memory budget of %zu MiB among %u clients is %.1f MiB; "
+             "read them, or retry after a second",
+             (double)mine / 1048576.0, d->cfg.memory_mb, clients,
+             (double)share / 1048576.0);
+  else
+    snprintf(detail, sizeof detail,
+             "the answers in flight hold %.1f MiB, the memory budget is %zu "
+             "MiB; retry after a second",
+             (double)srv_metrics_held(d->metrics, 0) / 1048576.0,
+             d->cfg.memory_mb);
   api_problem(ar, API_P_OVERLOADED, detail, NULL, NULL, 0);
 }

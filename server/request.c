@@ -18,7 +18,10 @@
  * round robin, a bounded queue per client, at most client_workers running
  * per client), and resumed with its answer by the worker that computed it.
  * What needs no computing (the api's inline endpoints, and every refusal)
- * is answered on the I/O thread at once.  POST /batch is batch.c's.
+ * is answered on the I/O thread at once.  POST /batch is batch.c's: its
+ * body is parsed in the pool too, and its answer started when the request
+ * is resumed.  Nothing whose work grows with the body runs on the I/O
+ * thread, which only collects the bytes.
  *
  * Completion.  Metrics, one line of access log, and the connection's
  * deadline for its next request.
@@ -44,7 +47,7 @@ int srv_address_text(const char *s, char *out, size_t n) {
   return af && inet_ntop(af, ip, out, (socklen_t)n) ? 0 : -1;
 }
 
-static int is_trusted(const struct srv_daemon *d, const char *addr) {
+int srv__trusted(const struct srv_daemon *d, const char *addr) {
   for (int i = 0; i < d->cfg.n_trusted; i++)
     if (strcmp(addr, d->cfg.trusted[i]) == 0)
       return 1;
@@ -71,7 +74,7 @@ static void client_of(const struct srv_daemon *d, struct MHD_Connection *c,
   const char *peer = r->cn ? r->cn->key : "?";
   snprintf(r->key, sizeof r->key, "%s", peer);
   const char *xff = NULL;
-  if (!is_trusted(d, peer))
+  if (!srv__trusted(d, peer))
     return;
   MHD_get_connection_values(c, MHD_HEADER_KIND, last_xff, &xff);
   for (size_t end = xff ? strlen(xff) : 0; end > 0;) {
@@ -91,7 +94,7 @@ static void client_of(const struct srv_daemon *d, struct MHD_Connection *c,
     if (srv_address_text(addr, text, sizeof text))
       return;
     snprintf(r->key, sizeof r->key, "%s", text);
-    if (!is_trusted(d, text))
+    if (!srv__trusted(d, text))
       return;
     end = start > 0 ? start - 1 : 0;
   }
@@ -328,7 +331,7 @@ static enum MHD_Result take_body(struct srv_daemon *d, srv__req *r,
                           (double)d->cfg.lim.max_body);
     return MHD_YES;
   }
-  if (r->over_budget || srv__over_budget(d)) {
+  if (r->over_budget || srv__over_budget(d, r->key)) {
     r->over_budget = 1; /* answered 503 once the body is in */
     return MHD_YES;
   }
@@ -381,8 +384,10 @@ static int job_gone(srv_job *j) {
  * queued while it was free may find it spent. */
 static void job_run(srv_job *j) {
   srv__req *r = (srv__req *)j;
-  if (srv__over_budget(r->d))
-    srv__budget_problem(r->d, &r->ar);
+  if (srv__over_budget(r->d, r->key))
+    srv__budget_problem(r->d, r->key, &r->ar);
+  else if (api_endpoint_at(r->ep)->run_class == API_RUN_BATCH)
+    srv__batch_open(r);
   else
     handle(r->d, r, &r->ar);
   /* the answer counts from now on, not from when it is sent */
@@ -398,6 +403,10 @@ static void job_run(srv_job *j) {
 /* Back to the I/O thread with an answer: the pool is done with the job. */
 static void job_done(srv_job *j) {
   srv__req *r = (srv__req *)j;
+  if (j->state != SRV_JOB_DONE) {
+    api_batch_free(r->ab); /* a batch's items not to be run */
+    r->ab = NULL;
+  }
   if (j->state == SRV_JOB_CANCELLED) {
     api_response_free(&r->ar);
     api_problem(&r->ar, API_P_CLIENT_CLOSED, "the client went away", NULL, NULL,
@@ -440,20 +449,18 @@ static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
 }
 
 /* The body of a computation is in: refused at once while the daemon shuts
- * down or the memory budget is spent; else a batch starts its answer, and
- * any other request goes to the pool. */
+ * down or the memory budget (or the client's share of it) is spent; else it
+ * goes to the pool (a batch's body to be parsed there). */
 static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
                                srv__req *r) {
   if (atomic_load(&d->draining))
     return srv__send_problem(c, r, API_P_SHUTTING_DOWN,
                              "the server is shutting down", NULL, 0, NULL);
-  if (r->over_budget || srv__over_budget(d)) {
+  if (r->over_budget || srv__over_budget(d, r->key)) {
     api_response ar;
-    srv__budget_problem(d, &ar);
+    srv__budget_problem(d, r->key, &ar);
     return srv__send_api(c, r, &ar, NULL);
   }
-  if (api_endpoint_at(r->ep)->run_class == API_RUN_BATCH)
-    return srv__batch_start(d, c, r);
   return submit(d, c, r);
 }
 
@@ -482,7 +489,8 @@ enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
     return MHD_YES;
   }
   if (r->answered) /* resumed by the pool */
-    return srv__send_api(c, r, &r->ar, NULL);
+    return r->ab ? srv__batch_start(d, c, r)
+                 : srv__send_api(c, r, &r->ar, NULL);
   if (r->done || r->p_status) {
     /* an answer is decided: discard whatever body still comes */
     if (*upload_data_size || r->done) {
@@ -608,8 +616,9 @@ void srv__completed(void *cls, struct MHD_Connection *c, void **con_cls,
     access_log(d, r, status, dt);
   /* the next request on this connection has its own deadline */
   srv__receiving(d, r->cn, 1);
-  srv_metrics_held(d->metrics, -r->held);
+  srv__held(d, r->key, -r->held);
   api_response_free(&r->ar);
+  api_batch_free(r->ab);
   free(r->buf);
   free(r);
   *con_cls = NULL;

@@ -18,7 +18,9 @@ typedef struct srv_config {
   int port;                /**< --port, STICKSLIP_PORT (8080; 0: any free) */
   api_limits lim;          /**< per-request limits */
   unsigned max_conn;       /**< --max-connections (2048) */
-  unsigned per_ip;         /**< --per-ip-connections (1024) */
+  unsigned per_ip;         /**< --per-ip-connections (256) */
+  unsigned reserved;       /**< --reserved-connections (256): the last
+                                slots, for addresses holding few */
   unsigned timeout;        /**< --connection-timeout seconds (10) */
   unsigned workers;        /**< --workers: computations at once (cores) */
   unsigned client_workers; /**< --client-workers: of one client (workers-1) */
