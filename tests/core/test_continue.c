@@ -1118,6 +1118,541 @@ static void test_transversality_curve(void) {
   ASSERT_EQ_INT(seen, 1);
 }
 
+/* The bits of two doubles are the same (a NaN equals itself). */
+static int same_bits(double a, double b) {
+  return memcmp(&a, &b, sizeof a) == 0;
+}
+
+#define ASSERT_SAME(a, b) ASSERT_TRUE(same_bits((a), (b)))
+#define ASSERT_SAME_N(a, b, n)                                                 \
+  do {                                                                         \
+    for (int k_ = 0; k_ < (n); k_++)                                           \
+      ASSERT_SAME((a)[k_], (b)[k_]);                                           \
+  } while (0)
+#define ASSERT_SAME_STR(a, b) ASSERT_TRUE(strcmp((a), (b)) == 0)
+
+static void same_margin(const ss_margin *a, const ss_margin *b) {
+  ASSERT_SAME(a->value, b->value);
+  ASSERT_EQ_INT(a->phase, b->phase);
+  ASSERT_SAME(a->t, b->t);
+}
+
+static void same_point(int n, const ss_cont_point *a, const ss_cont_point *b) {
+  ASSERT_SAME(a->value, b->value);
+  ASSERT_SAME_N(a->durations, b->durations, n);
+  ASSERT_SAME(a->period, b->period);
+  ASSERT_SAME_N(a->z0, b->z0, 4);
+  ASSERT_EQ_INT(a->n_turns, b->n_turns);
+  ASSERT_SAME_N(a->eig_re, b->eig_re, 2);
+  ASSERT_SAME_N(a->eig_im, b->eig_im, 2);
+  ASSERT_SAME(a->spectral_radius, b->spectral_radius);
+  ASSERT_EQ_INT(a->stable, b->stable);
+  same_margin(&a->min_margin, &b->min_margin);
+  ASSERT_SAME(a->residual, b->residual);
+}
+
+/* Two families, field by field. */
+static void same_branch(const ss_branch *a, const ss_branch *b) {
+  ASSERT_EQ_INT(a->n_phases, b->n_phases);
+  ASSERT_TRUE(!memcmp(a->modes, b->modes, sizeof a->modes));
+  ASSERT_EQ_INT((int)a->param, (int)b->param);
+  ASSERT_EQ_INT(a->physical, b->physical);
+  ASSERT_EQ_INT((int)a->phys, (int)b->phys);
+  ASSERT_SAME(a->lo, b->lo);
+  ASSERT_SAME(a->hi, b->hi);
+  ASSERT_EQ_INT(a->n_points, b->n_points);
+  ASSERT_EQ_INT(a->start, b->start);
+  ASSERT_EQ_INT(a->n_special, b->n_special);
+  ASSERT_SAME_STR(a->end[0], b->end[0]);
+  ASSERT_SAME_STR(a->end[1], b->end[1]);
+  if (a->n_points != b->n_points || a->n_special != b->n_special)
+    return;
+  for (int i = 0; i < a->n_points; i++)
+    same_point(a->n_phases, &a->points[i], &b->points[i]);
+  for (int i = 0; i < a->n_special; i++) {
+    const ss_special *s = &a->special[i], *t = &b->special[i];
+    ASSERT_EQ_INT((int)s->kind, (int)t->kind);
+    ASSERT_SAME(s->value, t->value);
+    ASSERT_SAME(s->precision, t->precision);
+    same_point(a->n_phases, &s->at, &t->at);
+    ASSERT_EQ_INT((int)s->margin, (int)t->margin);
+    ASSERT_EQ_INT(s->stable_before, t->stable_before);
+    ASSERT_EQ_INT(s->stable_after, t->stable_after);
+    ASSERT_SAME_STR(s->detail, t->detail);
+  }
+}
+
+/* Two curves, field by field. */
+static void same_curve(int n_phases, const ss_curve *a, const ss_curve *b) {
+  ASSERT_EQ_INT((int)a->kind, (int)b->kind);
+  ASSERT_EQ_INT((int)a->margin, (int)b->margin);
+  ASSERT_EQ_INT(a->phase, b->phase);
+  ASSERT_EQ_INT((int)a->p1, (int)b->p1);
+  ASSERT_EQ_INT((int)a->p2, (int)b->p2);
+  ASSERT_EQ_INT(a->n_points, b->n_points);
+  ASSERT_EQ_INT(a->start, b->start);
+  ASSERT_SAME_STR(a->end[0], b->end[0]);
+  ASSERT_SAME_STR(a->end[1], b->end[1]);
+  if (a->n_points != b->n_points)
+    return;
+  for (int i = 0; i < a->n_points; i++) {
+    const ss_curve_point *q = &a->points[i], *r = &b->points[i];
+    ASSERT_SAME(q->v1, r->v1);
+    ASSERT_SAME(q->v2, r->v2);
+    ASSERT_SAME_N(q->durations, r->durations, n_phases);
+    ASSERT_SAME_N(q->z0, r->z0, 4);
+    ASSERT_EQ_INT(q->feasible_side, r->feasible_side);
+  }
+}
+
+static void same_attractor(const ss_attractor *a, const ss_attractor *b) {
+  ASSERT_EQ_INT(a->found, b->found);
+  ASSERT_EQ_INT(a->perpetual_slip, b->perpetual_slip);
+  ASSERT_EQ_INT(a->n_turns, b->n_turns);
+  ASSERT_SAME(a->period, b->period);
+  ASSERT_EQ_INT(a->n_phases, b->n_phases);
+  ASSERT_EQ_INT(a->n_overshoot, b->n_overshoot);
+  int n = a->n_phases < SS_MAX_PHASES ? a->n_phases : SS_MAX_PHASES;
+  ASSERT_TRUE(!memcmp(a->modes, b->modes, n * sizeof a->modes[0]));
+  ASSERT_SAME_N(a->durations, b->durations, n);
+  ASSERT_SAME_N(a->s, b->s, 2);
+  ASSERT_EQ_INT(a->turns_run, b->turns_run);
+}
+
+/* A periodic orbit at @a p of the kinds @a kinds, @a n_phases phases (0:
+ * any) and period in (pmin, pmax), found with no guess; 0 if none. */
+static int orbit_at(const ss_params *p, unsigned kinds, int n_phases,
+                    double pmin, double pmax, ss_orbit *out) {
+  ss_model m;
+  ss_orbit_opts oo;
+  ss_orbit found[16];
+  int n = 0;
+  memset(&oo, 0, sizeof oo);
+  oo.kinds = kinds;
+  if (ss_model_init(&m, p, NULL) != SS_OK ||
+      ss_orbit_find(&m, &oo, found, 16, &n, NULL, NULL) != SS_OK)
+    return 0;
+  for (int i = 0; i < n; i++)
+    if ((!n_phases || found[i].n_phases == n_phases) &&
+        found[i].period > pmin && found[i].period < pmax) {
+      *out = found[i];
+      return 1;
+    }
+  return 0;
+}
+
+/* What a study's check saw: special points followed and not, families
+ * started (period-2, adjacent), attractors found past a grazing. */
+typedef struct study_count {
+  int followed, unfollowed, branches, beyond, adjacent;
+} study_count;
+
+/* The study's curves against ss_continue_grazing() or
+ * ss_continue_period_doubling() at each special point of the kind followed
+ * of the family @a b; one that cannot be followed says why, with no
+ * points. */
+static void same_curves(const ss_params *p, const ss_study_opts *o,
+                        const ss_branch *b, const ss_study *s, study_count *c) {
+  ss_cont_opts o2 = o->family;
+  o2.param = o->follow_param;
+  o2.lo = o->follow_lo;
+  o2.hi = o->follow_hi;
+  o2.direction = 0;
+  int nc = 0;
+  for (int i = 0; o->follow && i < b->n_special; i++) {
+    const ss_special *g = &b->special[i];
+    if (g->kind != o->follow_kind)
+      continue;
+    ss_curve cv;
+    ss_diag d;
+    ss_diag_clear(&d);
+    int rc = g->kind == SS_SPECIAL_GRAZING
+                 ? ss_continue_grazing(p, b, g, &o2, &cv, &d)
+                 : ss_continue_period_doubling(p, b, g, &o2, &cv, &d);
+    ASSERT_TRUE(nc < s->n_curves);
+    const ss_curve *sc = nc < s->n_curves ? &s->curves[nc++] : NULL;
+    if (sc && rc == SS_OK) {
+      same_curve(b->n_phases, sc, &cv);
+      c->followed++;
+    } else if (sc) {
+      ASSERT_EQ_INT((int)sc->kind, (int)g->kind);
+      ASSERT_EQ_INT((int)sc->p1, (int)b->param);
+      ASSERT_EQ_INT((int)sc->p2, (int)o->follow_param);
+      ASSERT_EQ_INT(sc->n_points, 0);
+      ASSERT_TRUE(sc->points == NULL);
+      ASSERT_EQ_INT(sc->start, -1);
+      ASSERT_SAME_STR(sc->end[0], d.text[0] ? d.text : ss_strerror(rc));
+      c->unfollowed++;
+    }
+    ss_curve_free(&cv);
+  }
+  ASSERT_EQ_INT(s->n_curves, nc);
+}
+
+/* The study's period-2 families against ss_continue_period2() at each
+ * period doubling of @a b, and why there is none where there is none;
+ * the next of the study's families in *nb. */
+static void same_period2(const ss_params *p, const ss_study_opts *o,
+                         const ss_branch *b, const ss_study *s, int *nb,
+                         study_count *c) {
+  for (int i = 0; o->branch_switching && i < b->n_special; i++) {
+    const ss_special *pd = &b->special[i];
+    if (pd->kind != SS_SPECIAL_PERIOD_DOUBLING)
+      continue;
+    ss_branch b2;
+    ss_diag d;
+    ss_diag_clear(&d);
+    int rc = ss_continue_period2(p, b, pd, &o->family, &b2, &d);
+    if (rc == SS_OK && *nb < s->n_branches) {
+      ASSERT_EQ_INT(s->of_special[*nb], i);
+      same_branch(&s->branches[(*nb)++], &b2);
+      c->branches++;
+    } else {
+      ASSERT_EQ_INT(rc, SS_ENOCONV);
+      ASSERT_SAME_STR(s->why_none[i], d.text);
+      ASSERT_TRUE(s->why_none[i][0] != '\0');
+    }
+    ss_branch_free(&b2);
+  }
+}
+
+/* Past each grazing of @a b: the study's attractor against
+ * ss_beyond_grazing(), its adjacent sequence against
+ * ss_continue_adjacent() (the family kept with branch switching). */
+static void same_beyond(const ss_params *p, const ss_study_opts *o,
+                        const ss_branch *b, const ss_study *s, int *nb,
+                        study_count *c) {
+  for (int i = 0; i < b->n_special; i++) {
+    const ss_special *g = &b->special[i];
+    const ss_beyond *by = &s->beyond[i];
+    if (g->kind != SS_SPECIAL_GRAZING)
+      continue;
+    double v;
+    ss_attractor a;
+    int done = ss_beyond_grazing(p, b, g, &v, &a) == SS_OK;
+    ASSERT_EQ_INT(by->done, done);
+    if (done) {
+      ASSERT_SAME(by->value, v);
+      same_attractor(&by->attractor, &a);
+      c->beyond++;
+    }
+    ss_branch adj;
+    ss_diag d;
+    ss_diag_clear(&d);
+    int rc = ss_continue_adjacent(p, b, g, &o->family, &adj, &d);
+    ASSERT_EQ_INT(by->adjacent_rc, rc);
+    ASSERT_EQ_INT(by->adjacent_n_phases, adj.n_phases);
+    ASSERT_TRUE(!memcmp(by->adjacent_modes, adj.modes, sizeof adj.modes));
+    ASSERT_SAME_STR(by->adjacent_why, d.text);
+    if (rc == SS_OK && o->branch_switching && *nb < s->n_branches) {
+      ASSERT_EQ_INT(s->of_special[*nb], i);
+      same_branch(&s->branches[(*nb)++], &adj);
+      c->adjacent++;
+    }
+    ss_branch_free(&adj);
+  }
+}
+
+/* The study @a s against the public calls it stands for, each made here
+ * separately with the same options: the family (ss_continue()), its
+ * curves, then the families started at its period doublings and past its
+ * grazings, in that order, and the attractors past its grazings; nothing
+ * said of a special point the study had nothing to say about. */
+static study_count check_study(const ss_params *p, const ss_orbit *start,
+                               const ss_study_opts *o, const ss_study *s) {
+  study_count c = {0, 0, 0, 0, 0};
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(p, start, &o->family, &b, NULL), SS_OK);
+  same_branch(&s->family, &b);
+  same_curves(p, o, &b, s, &c);
+  int nb = 0;
+  same_period2(p, o, &b, s, &nb, &c);
+  same_beyond(p, o, &b, s, &nb, &c);
+  ASSERT_EQ_INT(s->n_branches, nb);
+  for (int i = 0; i < SS_MAX_SPECIAL; i++) {
+    int pd = i < b.n_special && o->branch_switching &&
+             b.special[i].kind == SS_SPECIAL_PERIOD_DOUBLING;
+    int g = i < b.n_special && b.special[i].kind == SS_SPECIAL_GRAZING;
+    if (!pd)
+      ASSERT_TRUE(s->why_none[i][0] == '\0');
+    if (!g)
+      ASSERT_TRUE(s->beyond[i].done == 0 && s->beyond[i].adjacent_rc == 0);
+  }
+  ss_branch_free(&b);
+  return c;
+}
+
+/* A cancel hook that says stop after @a after polls (-1: never), and
+ * counts them. */
+typedef struct polls {
+  int n, after;
+} polls;
+
+static int poll_count(void *cls) {
+  polls *k = cls;
+  k->n++;
+  return k->after >= 0 && k->n > k->after;
+}
+
+/* One study of test_study: the parameters, the start and what it asks. */
+typedef struct study_case {
+  const char *what;
+  ss_params p;
+  unsigned kinds;
+  int n_phases;
+  double pmin, pmax;
+  ss_param_id param;
+  double lo, hi;
+  ss_special_kind kind;
+  ss_param_id follow;
+  double follow_lo, follow_hi;
+  study_count want; /* at least */
+} study_case;
+
+/* EVIDENCE: README "Families": one call, ss_continue_study, gives the
+ * family and what its special points lead to, the same to the bit as the
+ * separate calls it stands for, on families that end at grazings (of the
+ * switching condition, inside a phase, of a phase's end, one not located
+ * and so not followed), with period doublings (one that starts a period-2
+ * family, one that does not) and a fold */
+static void test_study(void) {
+  const double ur12 = 12 * PAPER.us;
+  const study_case cases[] = {
+      {"the paper's family in ur, its grazing followed in chi",
+       PAPER,
+       SS_ORBIT_OVERSHOOT,
+       0,
+       0,
+       INFINITY,
+       SS_PARAM_UR,
+       0.3,
+       1.5,
+       SS_SPECIAL_GRAZING,
+       SS_PARAM_CHI,
+       0.05,
+       0.6,
+       {1, 0, 0, 1, 0}},
+      {"the overshoot family in chi at ur = 12 us, its period doublings "
+       "followed in ur",
+       {0.2, 4, 0.0724, ur12, 1},
+       SS_ORBIT_OVERSHOOT,
+       0,
+       0,
+       INFINITY,
+       SS_PARAM_CHI,
+       0.01,
+       0.99,
+       SS_SPECIAL_PERIOD_DOUBLING,
+       SS_PARAM_UR,
+       0.3,
+       2.0,
+       {2, 0, 1, 2, 0}},
+      {"the stick-slip family in chi at ur = 12 us (a fold, grazings inside "
+       "the stick) followed in ur",
+       {0.5, 4, 0.0724, ur12, 1},
+       SS_ORBIT_STICKSLIP,
+       0,
+       12.559,
+       12.579,
+       SS_PARAM_CHI,
+       0.01,
+       0.99,
+       SS_SPECIAL_GRAZING,
+       SS_PARAM_UR,
+       0.3,
+       2.0,
+       {2, 0, 1, 2, 0}},
+      {"a slip-stick family in ur ending tangentially, followed in chi",
+       {0.45718539037873918, 0.957262457729113, 0.25138758401573669,
+        3.9803720170071393, 1},
+       SS_ORBIT_STICKSLIP,
+       2,
+       5,
+       6,
+       SS_PARAM_UR,
+       0.3 * 3.9803720170071393,
+       3 * 3.9803720170071393,
+       SS_SPECIAL_GRAZING,
+       SS_PARAM_CHI,
+       0.01,
+       0.99,
+       {1, 0, 1, 1, 0}},
+      {"a slip-stick family in ur whose end is not located",
+       {0.1, 0.3, 0.05, 3.9803720170071393, 1},
+       SS_ORBIT_STICKSLIP,
+       2,
+       60,
+       INFINITY,
+       SS_PARAM_UR,
+       0.3 * 3.9803720170071393,
+       3 * 3.9803720170071393,
+       SS_SPECIAL_GRAZING,
+       SS_PARAM_CHI,
+       0.05,
+       0.2,
+       {1, 1, 0, 2, 0}},
+  };
+  for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+    const study_case *k = &cases[c];
+    ss_orbit start;
+    ASSERT_TRUE(
+        orbit_at(&k->p, k->kinds, k->n_phases, k->pmin, k->pmax, &start));
+    ss_study_opts o;
+    memset(&o, 0, sizeof o);
+    o.family.param = k->param;
+    o.family.lo = k->lo;
+    o.family.hi = k->hi;
+    o.family.max_points = 400;
+    o.follow = 1;
+    o.follow_kind = k->kind;
+    o.follow_param = k->follow;
+    o.follow_lo = k->follow_lo;
+    o.follow_hi = k->follow_hi;
+    o.branch_switching = 1;
+    ss_study s;
+    ss_diag d;
+    ss_diag_clear(&d);
+    ASSERT_EQ_INT(ss_continue_study(&k->p, &start, &o, &s, &d), SS_OK);
+    study_count n = check_study(&k->p, &start, &o, &s);
+    printf("study of %s: %d special points; %d followed, %d not; %d "
+           "period-2 families, %d adjacent; %d attractors past a grazing\n",
+           k->what, s.family.n_special, n.followed, n.unfollowed, n.branches,
+           n.adjacent, n.beyond);
+    ASSERT_TRUE(n.followed >= k->want.followed);
+    ASSERT_TRUE(n.unfollowed >= k->want.unfollowed);
+    ASSERT_TRUE(n.branches >= k->want.branches);
+    ASSERT_TRUE(n.beyond >= k->want.beyond);
+    ss_study_free(&s);
+  }
+}
+
+/* EVIDENCE: README "Families": what ss_continue_study does besides the
+ * family is what its options ask; a family in a physical parameter is
+ * followed nowhere and has no beyond; a cancel stops it with what it
+ * found; ss_study_free is NULL-safe and zeroes */
+static void test_study_options(void) {
+  static const ss_study ZERO;
+  ss_study_free(NULL);
+  ss_params p = PAPER;
+  p.ur = 12 * p.us;
+  ss_orbit start;
+  ASSERT_EQ_INT(overshoot_at(&p, &start), 1);
+  ss_study_opts o;
+  memset(&o, 0, sizeof o);
+  o.family.param = SS_PARAM_CHI;
+  o.family.lo = 0.01;
+  o.family.hi = 0.99;
+  ss_study s;
+  ss_diag d;
+  ss_diag_clear(&d);
+  /* neither follow nor branch switching: the family, and past its
+   * grazings the attractors */
+  ASSERT_EQ_INT(ss_continue_study(&p, &start, &o, &s, &d), SS_OK);
+  study_count n = check_study(&p, &start, &o, &s);
+  ASSERT_EQ_INT(s.n_curves, 0);
+  ASSERT_EQ_INT(s.n_branches, 0);
+  ASSERT_TRUE(s.branches == NULL);
+  ASSERT_EQ_INT(n.beyond, 2);
+  ss_study_free(&s);
+  ASSERT_TRUE(!memcmp(&s, &ZERO, sizeof s));
+  ss_study_free(&s); /* twice is harmless */
+  /* a follow of another kind of special point is refused */
+  o.follow = 1;
+  o.follow_kind = SS_SPECIAL_FOLD;
+  ASSERT_EQ_INT(ss_continue_study(&p, &start, &o, &s, &d), SS_EINVAL);
+  ASSERT_TRUE(!strcmp(d.where, "follow"));
+  ss_study_free(&s);
+  /* the polls of the family alone; a cancel after them stops the first
+   * curve, after none stops the family at its start; each study holds
+   * what it found */
+  polls k = {0, -1};
+  o.follow_kind = SS_SPECIAL_PERIOD_DOUBLING;
+  o.follow_param = SS_PARAM_UR;
+  o.follow_lo = 0.3;
+  o.follow_hi = 2;
+  o.branch_switching = 1;
+  o.family.cancelled = poll_count;
+  o.family.cancel_cls = &k;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&p, &start, &o.family, &b, NULL), SS_OK);
+  ASSERT_TRUE(k.n > 0);
+  k.after = k.n;
+  k.n = 0;
+  ASSERT_EQ_INT(ss_continue_study(&p, &start, &o, &s, NULL), SS_ECANCELED);
+  same_branch(&s.family, &b);
+  ASSERT_EQ_INT(s.n_curves, 1);
+  ASSERT_EQ_INT(s.n_branches, 0);
+  ASSERT_TRUE(s.curves[0].n_points >= 1);
+  ASSERT_TRUE(strstr(s.curves[0].end[0], "cancelled") != NULL ||
+              strstr(s.curves[0].end[1], "cancelled") != NULL);
+  ss_study_free(&s);
+  /* following nothing, a cancel at the last poll of the first period-2
+   * family (after its orbit search, in its continuation): stopped, and
+   * none kept */
+  const ss_special *pd = NULL;
+  for (int i = 0; i < b.n_special && !pd; i++)
+    if (b.special[i].kind == SS_SPECIAL_PERIOD_DOUBLING)
+      pd = &b.special[i];
+  ASSERT_TRUE(pd != NULL);
+  ss_branch b2;
+  k.after = -1;
+  k.n = 0;
+  ASSERT_EQ_INT(ss_continue(&p, &start, &o.family, &b2, NULL), SS_OK);
+  ss_branch_free(&b2);
+  if (pd)
+    ASSERT_EQ_INT(ss_continue_period2(&p, &b, pd, &o.family, &b2, NULL), SS_OK);
+  ss_branch_free(&b2);
+  k.after = k.n - 1;
+  k.n = 0;
+  o.follow = 0;
+  ASSERT_EQ_INT(ss_continue_study(&p, &start, &o, &s, NULL), SS_ECANCELED);
+  same_branch(&s.family, &b);
+  ASSERT_EQ_INT(s.n_curves, 0);
+  ASSERT_EQ_INT(s.n_branches, 0);
+  ss_study_free(&s);
+  ss_branch_free(&b);
+  o.follow = 1;
+  o.family.cancelled = always;
+  o.family.cancel_cls = NULL;
+  ASSERT_EQ_INT(ss_continue_study(&p, &start, &o, &s, &d), SS_ECANCELED);
+  ASSERT_EQ_INT(s.family.n_points, 1); /* the start */
+  ASSERT_EQ_INT(s.n_curves, 0);
+  ASSERT_EQ_INT(s.n_branches, 0);
+  ss_study_free(&s);
+  ASSERT_TRUE(!memcmp(&s, &ZERO, sizeof s));
+  /* a family in Fr: its grazing is listed unfollowed with the reason, and
+   * nothing is simulated past it */
+  ss_physical ph = {2.5, 0.625, 8, 2, 0.724, 6.178, 2};
+  ASSERT_EQ_INT(ss_params_from_physical(&ph, &p, NULL, NULL), SS_OK);
+  ASSERT_EQ_INT(overshoot_at(&p, &start), 1);
+  memset(&o, 0, sizeof o);
+  o.family.physical = &ph;
+  o.family.phys = SS_PHYS_FR;
+  o.family.lo = 3;
+  o.family.hi = 15;
+  o.follow = 1;
+  o.follow_kind = SS_SPECIAL_GRAZING;
+  o.follow_param = SS_PARAM_US;
+  o.follow_lo = 0.05;
+  o.follow_hi = 0.1;
+  o.branch_switching = 1;
+  ASSERT_EQ_INT(ss_continue_study(&p, &start, &o, &s, &d), SS_OK);
+  ASSERT_EQ_INT(ss_continue(&p, &start, &o.family, &b, NULL), SS_OK);
+  same_branch(&s.family, &b);
+  ASSERT_EQ_INT(s.family.n_special, 1);
+  ASSERT_EQ_INT(s.n_curves, 1);
+  ASSERT_EQ_INT(s.curves[0].n_points, 0);
+  ASSERT_EQ_INT(s.curves[0].start, -1);
+  ASSERT_TRUE(strstr(s.curves[0].end[0], "physical parameter") != NULL);
+  ASSERT_EQ_INT(s.n_branches, 0);
+  ASSERT_TRUE(!memcmp(&s.beyond, &ZERO.beyond, sizeof s.beyond));
+  printf("study in Fr: %d points, its grazing not followed (%s), nothing "
+         "past it\n",
+         s.family.n_points, s.curves[0].end[0]);
+  ss_branch_free(&b);
+  ss_study_free(&s);
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_ur_family();
@@ -1132,5 +1667,7 @@ int main(void) {
   test_physical();
   test_interior_grazing_curve();
   test_transversality_curve();
+  test_study();
+  test_study_options();
   TEST_DONE();
 }
