@@ -1064,8 +1064,11 @@ SS_API void ss_branch_free(ss_branch *b);
  * value, nearest first.  The new family ends where it meets the period-1
  * family again (its halves become equal) or as any family does.
  * @return SS_OK (@a out is the period-2 family); SS_EINVAL (@a pd is not a
- *         period doubling); SS_ENOCONV (no period-2 orbit found near it);
- *         or as ss_continue().  Release @a out with ss_branch_free().
+ *         period doubling, or the family or @a o is in a physical
+ *         parameter); SS_ENOCONV (no period-2 orbit found near it);
+ *         SS_ELIMIT_TIME or SS_ECANCELED (the search for it stopped, or as
+ *         ss_continue()); or as ss_continue().  Release @a out with
+ *         ss_branch_free().
  */
 SS_API int ss_continue_period2(const ss_params *p, const ss_branch *b,
                                const ss_special *pd, const ss_cont_opts *o,

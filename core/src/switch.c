@@ -17,8 +17,10 @@ int ss_continue_period2(const ss_params *p, const ss_branch *b,
   if (!out)
     return ss__fail(d, SS_EINVAL, "branch", 0, "no output");
   memset(out, 0, sizeof *out);
-  if (!p || !b || !pd || !o || !ss_param_name(o->param))
-    return ss__fail(d, SS_EINVAL, "opts", 0, "a NULL argument");
+  if (!p || !b || !pd || !o || !ss_param_name(o->param) || o->physical ||
+      b->physical)
+    return ss__fail(d, SS_EINVAL, "opts", 0,
+                    "a NULL argument, or a physical parameter");
   if (pd->kind != SS_SPECIAL_PERIOD_DOUBLING || 2 * b->n_phases > SS_MAX_PHASES)
     return ss__fail(d, SS_EINVAL, "special", 0,
                     "not a period doubling of a family short enough to "
@@ -43,8 +45,16 @@ int ss_continue_period2(const ss_params *p, const ss_branch *b,
       oo.max_seconds = o->max_seconds;
       oo.cancelled = o->cancelled;
       oo.cancel_cls = o->cancel_cls;
-      if (ss_model_init(&m, &q, NULL) != SS_OK ||
-          ss_orbit_find(&m, &oo, found, 32, &nf, NULL, NULL) != SS_OK)
+      if (ss_model_init(&m, &q, NULL) != SS_OK)
+        continue;
+      int rc = ss_orbit_find(&m, &oo, found, 32, &nf, NULL, NULL);
+      /* out of time or cancelled: the search stops, it is not a side
+       * without a period-2 orbit */
+      if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED)
+        return ss__fail(d, rc, "special", pd->value,
+                        "the period-2 orbit's search near %.15g stopped",
+                        pd->value);
+      if (rc != SS_OK)
         continue;
       int best = -1;
       for (int k = 0; k < nf; k++) {

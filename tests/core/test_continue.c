@@ -1602,6 +1602,24 @@ static void test_study_options(void) {
   if (pd)
     ASSERT_EQ_INT(ss_continue_period2(&p, &b, pd, &o.family, &b2, NULL), SS_OK);
   ss_branch_free(&b2);
+  /* a cancel in the period-2 orbit's search stops it: it is not a side
+   * without a period-2 orbit (SS_ENOCONV); a physical parameter is refused */
+  int polls_period2 = k.n;
+  k.after = 0;
+  k.n = 0;
+  if (pd)
+    ASSERT_EQ_INT(ss_continue_period2(&p, &b, pd, &o.family, &b2, NULL),
+                  SS_ECANCELED);
+  ss_branch_free(&b2);
+  ss_physical ph_pd = {2.5, 0.625, 8, 2, 0.724, 6.178, 2};
+  ss_cont_opts in_fr = o.family;
+  in_fr.physical = &ph_pd;
+  in_fr.phys = SS_PHYS_FR;
+  if (pd)
+    ASSERT_EQ_INT(ss_continue_period2(&p, &b, pd, &in_fr, &b2, NULL),
+                  SS_EINVAL);
+  ss_branch_free(&b2);
+  k.n = polls_period2;
   k.after = k.n - 1;
   k.n = 0;
   o.follow = 0;
