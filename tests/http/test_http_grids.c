@@ -72,45 +72,48 @@ static void test_budget(void) {
 }
 
 /* EVIDENCE: DESIGN section 5 "a client that hangs up stops its
- * computation": the far slice at 100000 returns a cell, cut after 1 s.
- * Before the cancel flag was polled inside a cell it burned 112 CPU-s. */
+ * computation": the far slice at 100000 returns a cell, cut once it has
+ * computed for 1 CPU-s (its orbit search done, its first cell under way:
+ * 1 s on an idle machine, more on a loaded one).  Before the cancel flag was
+ * polled inside a cell it burned 112 CPU-s. */
 static void test_hang_up(void) {
   daemon_proc d;
   const char *args[] = {"--max-seconds", "600", NULL};
   ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
   PORT = d.port;
   double cancelled0 = metric(d.port, "stickslip_cancelled_total");
+  double cpu0 = cpu_seconds(d.pid), t0 = mono(), busy = 0;
   int fd = start(d.port, "/basins", FAR("1", "100000"));
-  usleep(500000);
-  double cpu0 = cpu_seconds(d.pid);
-  usleep(500000);
-  double busy = cpu_seconds(d.pid) - cpu0;
+  while (mono() - t0 < 20 && (busy = cpu_seconds(d.pid) - cpu0) < 1)
+    usleep(10000);
   close(fd);
+  double t1 = mono();
   usleep(200000);
   double cpu1 = cpu_seconds(d.pid);
   usleep(500000);
   double cpu2 = cpu_seconds(d.pid);
   double cancelled = metric(d.port, "stickslip_cancelled_total");
-  printf("grids: the far slice computing (%.2f CPU-s in 0.5 s), cut: %.3f "
-         "CPU-s in the 0.5 s from 0.2 s after\n",
-         busy, cpu2 - cpu1);
-  ASSERT_TRUE(busy > 0.1);
+  printf("grids: the far slice cut after %.2f CPU-s in %.2f s: %.3f CPU-s in "
+         "the 0.5 s from 0.2 s after\n",
+         busy, t1 - t0, cpu2 - cpu1);
+  ASSERT_TRUE(busy >= 1);
   ASSERT_TRUE(cpu2 - cpu1 < 0.05);
   ASSERT_TRUE(cancelled == cancelled0 + 1);
   health_ok("a far slice cut");
   fixture_daemon_stop(&d);
 }
 
-/* The most threads the daemon @a d has while it works on @a path's @a body
- * (sampled for @a seconds), then the request cut; @a idle its threads
- * before. */
+/* The most threads beyond its @a idle ones the daemon @a d has while it
+ * works on @a path's @a body, sampled for 3 s (the cells start after the
+ * orbit search, which under the sanitizers and a loaded machine has taken
+ * over 0.5 s) or until there are @a enough, then the request cut. */
 static int threads_while(const daemon_proc *d, const char *path,
-                         const char *body, double seconds, int *idle) {
-  *idle = threads_of(d->pid);
+                         const char *body, int enough) {
+  int idle = threads_of(d->pid);
   int fd = start(d->port, path, body), most = 0;
   double t0 = mono();
-  while (mono() - t0 < seconds) {
-    int n = threads_of(d->pid);
+  while (mono() - t0 < 3 && (enough == 0 || most < enough)) {
+    int n = threads_of(d->pid) - idle;
     most = n > most ? n : most;
     usleep(2000);
   }
@@ -139,17 +142,16 @@ static void test_threads(void) {
     ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
     PORT = d.port;
     health_ok("start");
-    int idle = 0;
-    int most = threads_while(&d, "/basins", FAR("4", "100000"), 0.5, &idle);
+    int more = threads_while(&d, "/basins", FAR("4", "100000"), cap - 1);
     printf("grids: client cap %d: /basins on %d threads beyond the idle "
-           "daemon's %d\n",
-           cap, most - idle, idle);
-    ASSERT_EQ_INT(most - idle, cap - 1);
-    most = threads_while(&d, "/map", WIDE_MAP, 1.0, &idle);
+           "daemon's\n",
+           cap, more);
+    ASSERT_EQ_INT(more, cap - 1);
+    more = threads_while(&d, "/map", WIDE_MAP, cap - 1);
     printf("grids: client cap %d: /map on %d threads beyond the idle "
-           "daemon's %d\n",
-           cap, most - idle, idle);
-    ASSERT_EQ_INT(most - idle, cap - 1);
+           "daemon's\n",
+           cap, more);
+    ASSERT_EQ_INT(more, cap - 1);
     /* another client is served while a /basins holds what it may */
     int fd = start(d.port, "/basins", FAR("4", "100000"));
     usleep(200000);
