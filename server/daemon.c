@@ -41,6 +41,11 @@ static int job_cancelled(void *cls) {
   return atomic_load(&((srv_job *)cls)->cancel);
 }
 
+/* A /map's or a /basins' threads: its own worker and what it may borrow. */
+static unsigned job_threads(void *cls, unsigned want) {
+  return 1 + srv_pool_borrow(cls, want > 1 ? want - 1 : 0);
+}
+
 api_server_info srv__server_info(struct srv_daemon *d, srv_job *job) {
   api_server_info info = {srv__now() - d->started,
                           srv_metrics_in_flight(d->metrics, 0),
@@ -49,7 +54,9 @@ api_server_info srv__server_info(struct srv_daemon *d, srv_job *job) {
                           d,
                           job_cancelled,
                           job,
-                          d->cfg.stream_above};
+                          d->cfg.stream_above,
+                          job_threads,
+                          job};
   return info;
 }
 

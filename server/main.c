@@ -57,13 +57,15 @@ static const flag FLAGS[] = {
     {"--max-basin-cells", F_SIZE, 1, 1e8, CFG(lim.max_basin_cells),
      "cells of one /basins slice"},
     {"--map-threads", F_UNSIGNED, 1, 1024, CFG(lim.map_threads),
-     "threads of one /map or /basins (default: workers)"},
+     "threads of one /map or /basins at most, of its client's workers "
+     "(default: workers)"},
     {"--batch-parallel", F_UNSIGNED, 1, 1024, CFG(batch_parallel),
      "items of one /batch in flight at once (default: workers)"},
     {"--workers", F_UNSIGNED, 1, 1024, CFG(workers),
      "computations at once (default: the number of cores)"},
     {"--client-workers", F_UNSIGNED, 1, 1024, CFG(client_workers),
-     "computations of one client at once (default: workers - 1, at least 1)"},
+     "computations of one client at once, /map's and /basins' threads "
+     "included (default: workers - 1, at least 1)"},
     {"--client-queue", F_UNSIGNED, 0, 1 << 20, CFG(client_queue),
      "computations of one client waiting; more get 503 at once"},
     {"--request-timeout", F_DOUBLE, 0.1, 3600, CFG(request_timeout),

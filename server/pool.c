@@ -6,7 +6,12 @@
  * (so that, with client_workers < workers, another client always finds a
  * free worker however long the first one's jobs are) and client_queue jobs
  * waiting; a job over that is refused at once, never kept waiting for a
- * slot.  A job whose client has gone away is dropped if it waits, and told
+ * slot.  A job that computes on threads of its own (a /map, a /basins)
+ * borrows a worker for each thread beyond its own, of those free now, and
+ * holds them until it ends: they count against its client's cap, and the
+ * pool's threads wait while they are out, so that no client, and not the
+ * pool, ever computes on more threads than --client-workers and --workers
+ * allow.  A job whose client has gone away is dropped if it waits, and told
  * to stop (its cancel flag, which the core polls) if it runs.
  */
 #define _POSIX_C_SOURCE 200809L
@@ -102,8 +107,11 @@ static void dequeue(srv_pool *p, srv_job *j) {
 }
 
 /* The next job to run: the first client, in serving order, with a job
- * waiting and a running slot free; that client then goes to the back. */
+ * waiting and a running slot free; that client then goes to the back.
+ * None while borrowed workers leave no slot free. */
 static srv_job *take(srv_pool *p) {
+  if (p->running >= p->n_threads)
+    return NULL;
   for (client *c = p->first; c; c = c->next) {
     if (!c->head || c->running >= p->cfg.client_workers)
       continue;
@@ -133,8 +141,9 @@ static void *worker(void *arg) {
       j->ops->run(j);
     pthread_mutex_lock(&p->mu);
     client *c = j->owner;
-    c->running--;
-    p->running--;
+    c->running -= 1 + j->extra;
+    p->running -= 1 + j->extra;
+    j->extra = 0;
     client_release(p, c);
     all_unlink(p, j);
     j->state = atomic_load(&j->cancel) ? SRV_JOB_CANCELLED : SRV_JOB_DONE;
@@ -192,6 +201,8 @@ int srv_pool_submit(srv_pool *p, srv_job *j, const char *key) {
       client_append(p, c);
     }
     j->owner = c;
+    j->pool = p;
+    j->extra = 0;
     j->next = NULL;
     j->state = SRV_JOB_WAITING;
     atomic_store(&j->cancel, 0);
@@ -213,6 +224,24 @@ int srv_pool_submit(srv_pool *p, srv_job *j, const char *key) {
   }
   pthread_mutex_unlock(&p->mu);
   return rc;
+}
+
+unsigned srv_pool_borrow(srv_job *j, unsigned want) {
+  srv_pool *p = j->pool;
+  pthread_mutex_lock(&p->mu);
+  client *c = j->owner;
+  unsigned n = want > j->extra ? want - j->extra : 0;
+  if (c->running + n > p->cfg.client_workers)
+    n = c->running < p->cfg.client_workers ? p->cfg.client_workers - c->running
+                                           : 0;
+  if (p->running + n > p->n_threads)
+    n = p->running < p->n_threads ? p->n_threads - p->running : 0;
+  c->running += n;
+  p->running += n;
+  j->extra += n;
+  n = j->extra < want ? j->extra : want;
+  pthread_mutex_unlock(&p->mu);
+  return n;
 }
 
 /* Take every waiting job for which @a gone says so (all when @a all) out

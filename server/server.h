@@ -76,6 +76,8 @@ struct srv_job {
   struct srv_job *next; /* in its client's queue */
   struct srv_job *all_prev, *all_next; /* waiting or running */
   void *owner;                         /* its client */
+  struct srv_pool *pool;               /* the pool it was submitted to */
+  unsigned extra; /* workers borrowed for its own threads (srv_pool_borrow) */
 };
 
 typedef struct srv_pool_cfg {
@@ -92,6 +94,12 @@ srv_pool *srv_pool_new(const srv_pool_cfg *cfg); /* NULL on failure */
 /* Queue @a j for the client @a key: 0, or SRV_POOL_FULL (that client's
  * queue is full), SRV_POOL_CLOSED, SRV_POOL_NOMEM. */
 int srv_pool_submit(srv_pool *p, srv_job *j, const char *key);
+/* For running job @a j, which computes on threads of its own (a /map, a
+ * /basins), up to @a want workers beyond its own, borrowed as its client's
+ * cap and the pool have them free now: the number it holds (perhaps 0).
+ * They count as its client's running jobs and keep as many of the pool's
+ * threads idle until @a j ends. */
+unsigned srv_pool_borrow(srv_job *j, unsigned want);
 /* Flag the running jobs whose client is gone (ops->gone), and drop the
  * waiting ones (done() with SRV_JOB_CANCELLED). */
 void srv_pool_watch(srv_pool *p);

@@ -125,6 +125,12 @@ typedef struct api_server_info {
    *  bytes are streamed (api_response.stream) instead of written whole;
    *  0: never. */
   size_t stream_above;
+  /** How many threads a computation that runs on several (/map, /basins)
+   *  may use, of the @a want it would (api_limits.map_threads), its own
+   *  included: at least 1.  The server counts the others as the client's
+   *  computations until the request ends.  NULL: @a want. */
+  unsigned (*threads)(void *cls, unsigned want);
+  void *threads_cls;
 } api_server_info;
 
 /**

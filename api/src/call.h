@@ -1,7 +1,9 @@
 /*
  * call.h: one call of an endpoint, as every step of serving it sees it: the
  * limits, the server's information, the problem being recorded and the
- * answer's lazy arrays.  A type only; endpoints.c makes one per request.
+ * answer's lazy arrays; endpoints.c makes one per request.  And the one
+ * question the limits and the server answer together: how many threads a
+ * computation may run on.
  */
 #ifndef SS_API_CALL_H
 #define SS_API_CALL_H
@@ -17,5 +19,17 @@ typedef struct api_call {
   api_err *e;
   api_lazies *lazy; /* the answer's lazy arrays (writer.c) */
 } api_call;
+
+/* The threads a /map or a /basins runs on: --map-threads, no more than the
+ * @a useful it can keep busy (rows, cells), and fewer when the server has
+ * fewer to spare for the client (api_server_info.threads). */
+static inline int api__threads(const api_call *c, long long useful) {
+  unsigned want = c->lim->map_threads > 0 ? c->lim->map_threads : 1;
+  if (useful < (long long)want)
+    want = useful > 1 ? (unsigned)useful : 1;
+  if (c->srv && c->srv->threads)
+    want = c->srv->threads(c->srv->threads_cls, want);
+  return want > 0 ? (int)want : 1;
+}
 
 #endif

@@ -191,7 +191,7 @@ int ep_basins_decode(const json_t *root, const api_call *c, void **xp) {
     o->state[i] = x->state.v[i] * unit[i];
   o->max_period = (int)x->max_period;
   o->max_returns = (int)x->max_returns;
-  o->threads = c->lim->map_threads > 0 ? (int)c->lim->map_threads : 1;
+  o->threads = api__threads(c, x->axes.a[0].n);
   o->max_seconds = c->lim->max_seconds;
   if (c->srv && c->srv->cancelled) {
     o->cancelled = c->srv->cancelled;

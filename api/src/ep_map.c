@@ -228,7 +228,7 @@ int ep_map_decode(const json_t *root, const api_call *c, void **xp) {
   o->search_every = x->search_every > 1000000 ? 1000000 : (int)x->search_every;
   o->no_edge_search = !x->edge_search;
   o->physical = x->ap.has_physical ? &x->ap.ph : NULL;
-  o->threads = c->lim->map_threads > 0 ? (int)c->lim->map_threads : 1;
+  o->threads = api__threads(c, cells);
   o->max_seconds = c->lim->max_seconds;
   if (c->srv && c->srv->cancelled) {
     o->cancelled = c->srv->cancelled;

@@ -11,6 +11,11 @@
 
 int ss_attractor_from(const ss_model *m, const double s0[2], int max_turns,
                       int max_period, ss_attractor *a) {
+  return ss__attractor_from(m, s0, max_turns, max_period, NULL, a);
+}
+
+int ss__attractor_from(const ss_model *m, const double s0[2], int max_turns,
+                       int max_period, ss__poll *poll, ss_attractor *a) {
   if (!m || !s0 || !a || max_turns < 1 || max_period < 1 || max_period > 256)
     return SS_EINVAL;
   memset(a, 0, sizeof *a);
@@ -30,7 +35,8 @@ int ss_attractor_from(const ss_model *m, const double s0[2], int max_turns,
   int rc = SS_OK;
   for (int t = 0; t < max_turns; t++) {
     turn *cur = &h[t % cap];
-    rc = ss_poincare(m, s, 1, 100000, cur->s, cur->modes, cur->dur, &cur->n);
+    rc = ss__poincare(m, s, 1, 100000, cur->s, cur->modes, cur->dur, &cur->n,
+                      poll);
     if (rc == SS_HORIZON) {
       a->perpetual_slip = 1;
       a->turns_run = t + 1;

@@ -24,6 +24,12 @@
  * land nowhere are then simulated on to find what they settle on; each
  * periodic attractor found that way is solved as an orbit and, when it is a
  * feasible stable one, added, and the unresolved cells are run again.
+ *
+ * The time budget and the cancel hook are polled inside the cells, every
+ * SS__POLL_EVERY events of their motions (and of the attractor finder's and
+ * the contraction check's), not only between rows: a cell far from every
+ * attractor may simulate max_returns returns, seconds of work, before it is
+ * unresolved, and a row of them minutes.
  */
 #include <math.h>
 #include <pthread.h>
@@ -83,9 +89,9 @@ static int landed(const ss_basins *b, const double s[2]) {
 }
 
 /* Simulate from @a x0 until a return lands: the label; *returns the
- * returns it took, s the last return. */
-static int follow(const runner *r, const double x0[4], int *returns,
-                  double s[2]) {
+ * returns it took, s the last return.  Unresolved when @a poll says stop. */
+static int follow(const runner *r, const double x0[4], ss__poll *poll,
+                  int *returns, double s[2]) {
   const ss_model *m = r->m;
   ss_sim sim;
   ss_event ev;
@@ -94,6 +100,8 @@ static int follow(const runner *r, const double x0[4], int *returns,
     return SS_BASIN_UNRESOLVED;
   size_t max_events = (size_t)(r->max_returns + 1) * BASIN_EVENTS_PER_RETURN;
   for (size_t k = 0; k < max_events; k++) {
+    if (ss__poll_tick(poll))
+      return SS_BASIN_UNRESOLVED;
     int rc = ss_sim_next_event(&sim, INFINITY, &ev);
     if (rc == SS_HORIZON)
       return SS_BASIN_PERPETUAL;
@@ -123,12 +131,22 @@ static int over_budget(runner *r) {
   return r->stopped != 0;
 }
 
+/* over_budget() from any thread: the stop of the runner's polls. */
+static int must_stop(void *cls) {
+  runner *r = cls;
+  pthread_mutex_lock(&r->lock);
+  int stop = over_budget(r);
+  pthread_mutex_unlock(&r->lock);
+  return stop;
+}
+
 static void *worker(void *arg) {
   runner *r = arg;
   const ss_basin_opts *o = r->o;
   int n1 = o->n[1];
   long returns = 0;
   int max_seen = 0;
+  ss__poll poll = {must_stop, r, 0, 0};
   for (;;) {
     pthread_mutex_lock(&r->lock);
     int i = -1;
@@ -137,7 +155,7 @@ static void *worker(void *arg) {
     pthread_mutex_unlock(&r->lock);
     if (i < 0)
       break;
-    for (int j = 0; j < n1; j++) {
+    for (int j = 0; j < n1 && !poll.stopped; j++) {
       unsigned char *lab = &r->b->labels[(size_t)i * (size_t)n1 + (size_t)j];
       if (r->only_unresolved && *lab != SS_BASIN_UNRESOLVED)
         continue;
@@ -145,7 +163,7 @@ static void *worker(void *arg) {
       memcpy(x, o->state, sizeof x);
       x[o->vary[0]] = axis_value(o, 0, i);
       x[o->vary[1]] = axis_value(o, 1, j);
-      int n = 0, l = follow(r, x, &n, s);
+      int n = 0, l = follow(r, x, &poll, &n, s);
       *lab = (unsigned char)l;
       returns += n;
       if (n > max_seen && l < SS_BASIN_MAX_ATTRACTORS)
@@ -177,8 +195,9 @@ static void run_rows(runner *r) {
 
 /* The returns of the orbit @a o (its start and P of it, k - 1 times), and
  * the certified radius; 0, or -1 when the orbit cannot be an attractor
- * here (more turns than room, or the check fails at every radius). */
-static int certify(const ss_model *m, const ss_orbit *o,
+ * here (more turns than room, or the check fails at every radius) or when
+ * @a poll says stop. */
+static int certify(const ss_model *m, const ss_orbit *o, ss__poll *poll,
                    ss_basin_attractor *a) {
   int k = o->n_turns;
   if (k < 1 || k > SS_BASIN_MAX_TURNS)
@@ -189,8 +208,8 @@ static int certify(const ss_model *m, const ss_orbit *o,
   a->points[0][1] = o->z0[2];
   size_t ev = BASIN_EVENTS_PER_RETURN * (size_t)k;
   for (int i = 1; i < k; i++)
-    if (ss_poincare(m, a->points[i - 1], 1, ev, a->points[i], NULL, NULL,
-                    NULL) != SS_OK)
+    if (ss__poincare(m, a->points[i - 1], 1, ev, a->points[i], NULL, NULL, NULL,
+                     poll) != SS_OK)
       return -1;
   const ss_params *p = &m->p;
   double scale = fmax(p->V, (p->ur - p->us) / p->chi);
@@ -200,7 +219,7 @@ static int certify(const ss_model *m, const ss_orbit *o,
   if (o->min_margin.value > 0 && o->min_margin.value < rad)
     rad = o->min_margin.value;
   for (int h = 0; h < BASIN_HALVINGS; h++, rad *= 0.25)
-    for (int it = 1; it <= BASIN_MAX_ITERATIONS; it++) {
+    for (int it = 1; it <= BASIN_MAX_ITERATIONS && !poll->stopped; it++) {
       int ok = 1;
       /* the circle, a circle of half the radius, and the centre */
       for (int i = 0; i < k && ok; i++)
@@ -215,8 +234,8 @@ static int certify(const ss_model *m, const ss_orbit *o,
           double s[2] = {a->points[i][0] + u * cos(ang),
                          a->points[i][1] + u * sin(ang)},
                  e[2];
-          ok = ss_poincare(m, s, k * it, ev * (size_t)it, e, NULL, NULL,
-                           NULL) == SS_OK &&
+          ok = ss__poincare(m, s, k * it, ev * (size_t)it, e, NULL, NULL, NULL,
+                            poll) == SS_OK &&
                hypot(e[0] - a->points[i][0], e[1] - a->points[i][1]) <
                    BASIN_SHRINK * rad;
         }
@@ -237,13 +256,13 @@ static int known(const ss_basins *b, const ss_orbit *o) {
 }
 
 static int add_attractor(const ss_model *m, ss_basins *b, const ss_orbit *o,
-                         int from_simulation) {
+                         int from_simulation, ss__poll *poll) {
   if (!o->stab.stable || o->stab.marginal || known(b, o) ||
       b->n_attractors == SS_BASIN_MAX_ATTRACTORS)
     return 0;
   ss_basin_attractor a;
   memset(&a, 0, sizeof a);
-  if (certify(m, o, &a) != 0)
+  if (certify(m, o, poll, &a) != 0)
     return 0;
   a.from_simulation = from_simulation;
   b->attractors[b->n_attractors++] = a;
@@ -256,8 +275,9 @@ static int from_simulation(runner *r) {
   const ss_basin_opts *o = r->o;
   ss_basins *b = r->b;
   int added = 0, tried = 0;
+  ss__poll poll = {must_stop, r, 0, 0};
   for (int i = 0; i < o->n[0] && !over_budget(r); i++)
-    for (int j = 0; j < o->n[1] && tried < 64; j++) {
+    for (int j = 0; j < o->n[1] && tried < 64 && !poll.stopped; j++) {
       size_t c = (size_t)i * (size_t)o->n[1] + (size_t)j;
       if (b->labels[c] != SS_BASIN_UNRESOLVED)
         continue;
@@ -266,12 +286,12 @@ static int from_simulation(runner *r) {
       x[o->vary[0]] = axis_value(o, 0, i);
       x[o->vary[1]] = axis_value(o, 1, j);
       int n = 0;
-      if (follow(r, x, &n, s) != SS_BASIN_UNRESOLVED || n == 0)
+      if (follow(r, x, &poll, &n, s) != SS_BASIN_UNRESOLVED || n == 0)
         continue;
       tried++;
       ss_attractor at;
-      if (ss_attractor_from(r->m, s, BASIN_SETTLE_TURNS, r->o->max_period,
-                            &at) != SS_OK ||
+      if (ss__attractor_from(r->m, s, BASIN_SETTLE_TURNS, r->o->max_period,
+                             &poll, &at) != SS_OK ||
           !at.found || at.n_phases > SS_MAX_PHASES)
         continue;
       ss_orbit orb;
@@ -279,7 +299,7 @@ static int from_simulation(runner *r) {
                          NULL) != SS_OK)
         continue;
       orb.source = SS_SOURCE_SIMULATION;
-      if (add_attractor(r->m, b, &orb, 1)) {
+      if (add_attractor(r->m, b, &orb, 1, &poll)) {
         added = 1;
         /* this cell and those like it are run again */
         return added;
@@ -354,8 +374,9 @@ int ss_basins_run(const ss_model *m, const ss_basin_opts *opts, ss_basins *b,
     pthread_mutex_destroy(&r.lock);
     return rc;
   }
+  ss__poll poll = {must_stop, &r, 0, 0};
   for (int i = 0; i < nf; i++)
-    add_attractor(m, b, &found[i], 0);
+    add_attractor(m, b, &found[i], 0, &poll);
   /* the cells; then those that land nowhere, after each new attractor */
   r.only_unresolved = 0;
   if (!r.stopped)

@@ -48,6 +48,7 @@ int ss__returns_start(ss__returns *r, const ss_model *m, const double s[2]) {
   ss_z_to_x(m, z, x);
   r->t_last = 0;
   r->np = 0;
+  r->poll = NULL;
   return ss__sim_init_mode(&r->sim, m, 0, x, SS_MODE_SLIP, NULL);
 }
 
@@ -55,6 +56,8 @@ int ss__returns_next(ss__returns *r, size_t *events_left, double out[2],
                      ss_mode *modes, double *durations) {
   ss_event ev;
   while (*events_left > 0) {
+    if (ss__poll_tick(r->poll))
+      return SS_ECANCELED;
     (*events_left)--;
     double t_stop = ss_sim_time(&r->sim) + MAP_HORIZON;
     ss_mode cur = r->sim.mode;
@@ -83,16 +86,24 @@ int ss__returns_next(ss__returns *r, size_t *events_left, double out[2],
   return SS_ELIMIT_EVENTS;
 }
 
-int ss_poincare(const ss_model *m, const double s[2], int turns,
-                size_t max_events, double out[2], ss_mode *modes,
-                double *durations, int *n_phases) {
+int ss__poincare(const ss_model *m, const double s[2], int turns,
+                 size_t max_events, double out[2], ss_mode *modes,
+                 double *durations, int *n_phases, ss__poll *poll) {
   ss__returns r;
   int rc = ss__returns_start(&r, m, s);
+  r.poll = poll;
   for (int done = 0; done < turns && rc == SS_OK; done++)
     rc = ss__returns_next(&r, &max_events, out, modes, durations);
   if (rc == SS_OK && n_phases)
     *n_phases = r.np;
   return rc;
+}
+
+int ss_poincare(const ss_model *m, const double s[2], int turns,
+                size_t max_events, double out[2], ss_mode *modes,
+                double *durations, int *n_phases) {
+  return ss__poincare(m, s, turns, max_events, out, modes, durations, n_phases,
+                      NULL);
 }
 
 /* Passes through Sigma0 of a sequence: the sticks that end into slip (the
