@@ -7,7 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal.h"
+#include "attractor.h"
+#include "stability.h"
 
 int ss_attractor_from(const ss_model *m, const double s0[2], int max_turns,
                       int max_period, ss_attractor *a) {

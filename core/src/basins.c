@@ -36,7 +36,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "attractor.h"
 #include "internal.h"
+#include "simulate.h"
+#include "stability.h"
 
 #define BASIN_MAX_RETURNS 500
 #define BASIN_EVENTS_PER_RETURN 64

@@ -55,7 +55,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal.h"
+#include "certify.h"
 
 #define NV 4           /* unknowns: t1, t2, s1, s2 */
 #define STACK_MAX 512  /* boxes waiting (depth-first) */

@@ -27,6 +27,8 @@
 #include "arclength.h"
 #include "continue.h"
 #include "internal.h"
+#include "modal.h"
+#include "params.h"
 
 #define NMAX ARC_NMAX
 

@@ -18,6 +18,7 @@
 #include "arclength.h"
 #include "continue.h"
 #include "internal.h"
+#include "params.h"
 
 #define NMAX ARC_NMAX
 

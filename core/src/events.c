@@ -22,7 +22,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "internal.h"
+#include "events.h"
 #include "sincos.h"
 
 /* A zero within tol = TOL_ULPS * DBL_EPSILON * scale is indistinguishable

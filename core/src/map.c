@@ -26,6 +26,8 @@
 #include <string.h>
 
 #include "internal.h"
+#include "params.h"
+#include "search.h"
 
 #define MAP_SEARCH_EVERY 8
 #define MAP_MAX_ORBITS 16

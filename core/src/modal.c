@@ -13,7 +13,9 @@
 #include <math.h>
 #include <string.h>
 
+#include "events.h"
 #include "internal.h"
+#include "modal.h"
 #include "sincos.h"
 
 const char *ss_mode_name(ss_mode m) {
@@ -116,8 +118,10 @@ double ss_stick_force(const ss_model *m, const double x[4]) {
   return m->p.chi * (x[1] - x[0]);
 }
 
-void ss__modal(const ss_model *m, const double zb[4], double q[2],
-               double qd[2]) {
+/* Modal amplitudes of the free oscillation about an equilibrium: with
+ * zb = the shifted state, q = phiinv zb[0..1], qd = phiinv zb[2..3]. */
+static void modal_amplitudes(const ss_model *m, const double zb[4], double q[2],
+                             double qd[2]) {
   q[0] = m->phiinv[0][0] * zb[0] + m->phiinv[0][1] * zb[1];
   q[1] = m->phiinv[1][0] * zb[0] + m->phiinv[1][1] * zb[1];
   qd[0] = m->phiinv[0][0] * zb[2] + m->phiinv[0][1] * zb[3];
@@ -133,7 +137,7 @@ static void free_flow(const ss_model *m, double sgn, double t,
   zb[1] = x0[1] - sgn * m->d0[1];
   zb[2] = x0[2];
   zb[3] = x0[3];
-  ss__modal(m, zb, q, qd);
+  modal_amplitudes(m, zb, q, qd);
   for (int k = 0; k < 2; k++) {
     double w = m->w[k], c, s;
     ss__sincos(w * t, &s, &c);
@@ -201,7 +205,7 @@ void ss__coords(const ss_model *m, ss_mode mode, const double x[4],
   double sgn = mode == SS_MODE_SLIP ? 1.0 : -1.0;
   double zb[4] = {x[0] - sgn * m->d0[0], x[1] - sgn * m->d0[1], x[2], x[3]};
   double q[2], qd[2];
-  ss__modal(m, zb, q, qd);
+  modal_amplitudes(m, zb, q, qd);
   for (int i = 0; i < 2; i++) {
     g[i].c0 = sgn * m->d0[i];
     g[i].n = g[i + 2].n = 2;
@@ -330,7 +334,7 @@ void ss__switching(const ss_model *m, ss_mode mode, int sign, const double x[4],
   double sgn = mode == SS_MODE_SLIP ? 1.0 : -1.0;
   double zb[4] = {x[0] - sgn * m->d0[0], x[1] - sgn * m->d0[1], x[2], x[3]};
   double q[2], qd[2];
-  ss__modal(m, zb, q, qd);
+  modal_amplitudes(m, zb, q, qd);
   /* x2'(t) = sum_k phi[1][k] (qd_k cos(w_k t) - q_k w_k sin(w_k t)). */
   g->n = 2;
   g->c0 = -sgn * m->p.V;

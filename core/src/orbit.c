@@ -12,8 +12,12 @@
 #include <gsl/gsl_multiroots.h>
 #include <gsl/gsl_vector.h>
 
+#include "events.h"
 #include "internal.h"
 #include "linalg.h"
+#include "modal.h"
+#include "orbit.h"
+#include "simulate.h"
 
 #define MAXP SS_MAX_PHASES
 

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "internal.h"
+#include "params.h"
 
 static int check_pos(ss_diag *d, const char *name, double v) {
   if (!isfinite(v))

@@ -42,7 +42,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal.h"
+#include "scan.h"
 #include "sincos.h"
 
 #define SCAN_MAX_DEPTH 3

@@ -18,7 +18,12 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "certify.h"
 #include "internal.h"
+#include "orbit.h"
+#include "scan.h"
+#include "search.h"
+#include "stability.h"
 
 #define SS_TWO_PI 6.283185307179586476925287
 #define MAP_EVENTS 64    /* events allowed for one return to Sigma0 */

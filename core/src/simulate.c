@@ -16,7 +16,10 @@
 #include <string.h>
 #include <time.h>
 
+#include "events.h"
 #include "internal.h"
+#include "modal.h"
+#include "simulate.h"
 #include "sincos.h"
 
 double ss__now(void) {
@@ -221,12 +224,21 @@ static ss_mode mode_after_slip(const ss_model *m, ss_mode from,
   return to == from ? SS_MODE_STICK : to;
 }
 
+/* Error-free sum of two doubles (Knuth's TwoSum). */
+static void two_sum(double a, double b, double *s, double *e) {
+  double x = a + b;
+  double bv = x - a;
+  double av = x - bv;
+  *s = x;
+  *e = (a - av) + (b - bv);
+}
+
 /* The absolute time of local time tau, (t_hi + t_lo) + tau, renormalised
  * into *hi + *lo as the anchor is at an event. */
 static void abs_time2(const ss_sim *s, double tau, double *hi, double *lo) {
   double h, err;
-  ss__two_sum(s->t_hi, tau, &h, &err);
-  ss__two_sum(h, s->t_lo + err, hi, lo);
+  two_sum(s->t_hi, tau, &h, &err);
+  two_sum(h, s->t_lo + err, hi, lo);
 }
 
 /* That time as one double: the event time sim_commit() will record, so

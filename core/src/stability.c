@@ -17,8 +17,9 @@
 #include <math.h>
 #include <string.h>
 
-#include "internal.h"
 #include "linalg.h"
+#include "simulate.h"
+#include "stability.h"
 
 /* Room for the phases of one return to Sigma0 while searching. */
 #define MAP_HORIZON 1e5

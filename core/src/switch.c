@@ -8,6 +8,7 @@
 
 #include "continue.h"
 #include "internal.h"
+#include "params.h"
 
 /* ---- the period-2 family at a period doubling ------------------------- */
 

@@ -12,7 +12,7 @@
 #include <float.h>
 #include <string.h>
 
-#include "../core/src/internal.h"
+#include "../core/src/events.h"
 #include "test.h"
 
 static unsigned long seed = 2024;

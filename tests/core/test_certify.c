@@ -26,7 +26,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../core/src/internal.h"
+#include "../core/src/certify.h"
 #include "battery.h"
 #include "brute.h"
 #include "test.h"
