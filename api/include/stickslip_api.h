@@ -175,8 +175,10 @@ size_t api_batch_held(const api_batch *b);
 int api_batch_run(api_batch *b, size_t i, const api_limits *lim,
                   const api_server_info *srv, api_response *out);
 /** The line of item @a i, whose answer is @a item (consumed, whatever
- *  happens; made by api_batch_run or api_problem), as a stream that ends
- *  with a newline.  *held: the bytes it keeps.  NULL when out of memory. */
+ *  happens; made by api_batch_run or api_problem), as a stream of one
+ *  line that ends with a newline: an NDJSON answer (a /map's) is carried as
+ *  the array of its lines.  *held: the bytes it keeps.  NULL when out of
+ *  memory. */
 api_stream *api_batch_line(const api_batch *b, size_t i, api_response *item,
                            size_t *held);
 /** The last line (a body, malloc'd, in @a out). */

@@ -6,7 +6,9 @@
  * that one bad item is answered by its own line and the others go on.  An
  * item keeps the compact text of its body: it is served exactly as the same
  * body posted to its endpoint would be (api__handle), with that endpoint's
- * limits, and the batch holds no JSON tree while its items run.
+ * limits, and the batch holds no JSON tree while its items run.  Each item
+ * is one line of the batch's NDJSON: an item whose answer is NDJSON itself
+ * (a /map) has the array of its lines as its body.
  *
  * The server runs the items itself, on its pool, and writes each line as
  * it is done (api_batch_run, api_batch_line); the endpoint's own run below
@@ -221,6 +223,23 @@ int api_batch_run(api_batch *b, size_t i, const api_limits *lim,
   return api__handle(it->ep, it->body, it->len, lim, srv, out, "/body");
 }
 
+/* An NDJSON answer (a /map's lines, written whole by its endpoint) as one
+ * JSON value, so that the batch's line stays one line: the array of its
+ * lines, whose brackets the batch line's head and tail write.  A line of
+ * JSON holds no raw newline (strings escape it), so each newline but the
+ * last becomes a comma and the last goes; in place, the bytes it holds no
+ * more than they were.  1 when @a r is such an answer. */
+static int ndjson_as_array(api_response *r) {
+  if (!r->content_type || strcmp(r->content_type, "application/x-ndjson") ||
+      r->stream || !r->body || r->len == 0 || r->body[r->len - 1] != '\n')
+    return 0;
+  r->len--;
+  for (size_t j = 0; j < r->len; j++)
+    if (r->body[j] == '\n')
+      r->body[j] = ',';
+  return 1;
+}
+
 api_stream *api_batch_line(const api_batch *b, size_t i, api_response *item,
                            size_t *held) {
   const char *id = b->items[i].id ? b->items[i].id : "null";
@@ -230,11 +249,13 @@ api_stream *api_batch_line(const api_batch *b, size_t i, api_response *item,
     api_response_free(item);
     return NULL;
   }
+  int lines = ndjson_as_array(item);
   int k =
-      snprintf(head, n, "{\"id\":%s,\"index\":%zu,\"status\":%d,\"body\":", id,
-               i, item->status);
-  *held = (size_t)k + 2 + item->held;
-  return api__stream_wrap(head, (size_t)k, item, "}\n");
+      snprintf(head, n, "{\"id\":%s,\"index\":%zu,\"status\":%d,\"body\":%s",
+               id, i, item->status, lines ? "[" : "");
+  const char *tail = lines ? "]}\n" : "}\n";
+  *held = (size_t)k + strlen(tail) + item->held;
+  return api__stream_wrap(head, (size_t)k, item, tail);
 }
 
 void api_batch_done(size_t ok, size_t failed, double seconds,

@@ -1,7 +1,8 @@
 /*
  * test_http_batch.c (CTest http_batch): POST /batch through HTTP: an NDJSON
  * line per item as it is done, bad items answered by their own lines, the
- * batch refused as a whole, a hang-up and a shutdown mid-batch.
+ * batch refused as a whole, a hang-up and a shutdown mid-batch, and every
+ * path an item may ask answered on one line as it is alone.
  */
 #define _GNU_SOURCE
 #include <math.h>
@@ -358,9 +359,140 @@ static void test_batch(void) {
   unlink(d.log_path);
 }
 
+/* The answer to @a body posted alone to @a path, as JSON: an NDJSON answer
+ * as the array of its lines; NULL after a failure. */
+static json_t *alone(const char *path, const char *body) {
+  http_resp r;
+  json_t *j = NULL;
+  if (http_do(PORT, "POST", path, JSON, body, &r) != 0 || r.status != 200) {
+    TEST_FAIL_("POST %s alone: no 200", path);
+    http_free(&r);
+    return NULL;
+  }
+  if (strcmp(r.ctype, "application/x-ndjson") != 0) {
+    j = json_loadb(r.body, r.len, 0, NULL);
+  } else {
+    j = json_array();
+    for (char *a = r.body, *e; (e = strchr(a, '\n')); a = e + 1)
+      json_array_append_new(j, json_loadb(a, (size_t)(e - a), 0, NULL));
+  }
+  http_free(&r);
+  return j;
+}
+
+/* The lines of an NDJSON answer with their "seconds" (a /map's last line:
+ * the time it took) left out. */
+static void drop_seconds(json_t *lines) {
+  size_t i;
+  json_t *l;
+  json_array_foreach(lines, i, l) json_object_del(l, "seconds");
+}
+
+/* The paths an item may ask, as a refused item's problem lists them:
+ * "..., an item may ask /orbit, /simulate, ...". */
+static void paths_allowed(const ndjson *nd, int index, char *out, size_t n) {
+  const char *d = str_at(item_line(nd, index), "body", "detail");
+  const char *at = strstr(d, "may ask ");
+  snprintf(out, n, "%s", at ? at + 8 : "");
+}
+
+/* EVIDENCE: README "POST /batch": every path an item may ask, /map
+ * included, answered on one line of the batch (a /map's lines as an array),
+ * with the body it gets alone */
+static void test_every_path(void) {
+  static const struct {
+    const char *path, *body;
+  } items[] = {
+      {"/orbit", "{" PAPER ",\"guess\":{\"durations\":[4.5,2.717,3.0536]}}"},
+      {"/simulate", "{" PAPER ",\"initial\":" X0 ",\"t_end\":10.27}"},
+      {"/stability", NULL /* CHEAP */},
+      {"/continue",
+       "{" PAPER ",\"guess\":{\"durations\":[4.4975,2.7227,3.0513]},"
+       "\"parameter\":\"ur\",\"range\":[0.3,1.5],\"direction\":\"down\"}"},
+      {"/map", "{" PAPER ",\"axes\":[{\"parameter\":\"ur\",\"from\":0.55,"
+               "\"to\":0.75,\"n\":5}],\"kind\":\"overshoot\"}"},
+      {"/map", "{" PAPER ",\"axes\":[{\"parameter\":\"ur\",\"from\":0.65,"
+               "\"to\":0.75,\"n\":2}],\"kind\":\"overshoot\",\"fields\":"
+               "[\"period\",\"multipliers\",\"marginal\"]}"},
+      {"/basins",
+       "{" PAPER ",\"axes\":[{\"variable\":\"x1\",\"from\":-2,\"to\":4,"
+       "\"n\":6},{\"variable\":\"x2\",\"from\":0,\"to\":8,\"n\":6}],"
+       "\"state\":{\"v1\":0,\"v2\":1}}"},
+  };
+  enum { N = sizeof items / sizeof items[0] };
+  daemon_proc d;
+  fixture_daemon_start(&d);
+  char body[8192], list[256] = "";
+  size_t k = (size_t)snprintf(body, sizeof body, "{\"requests\":[");
+  for (int i = 0; i < N; i++)
+    k += (size_t)snprintf(body + k, sizeof body - k,
+                          "{\"id\":%d,\"path\":\"%s\",\"body\":%s},", i,
+                          items[i].path, items[i].body ? items[i].body : CHEAP);
+  /* an item that is refused, whose problem lists the paths an item may ask */
+  snprintf(body + k, sizeof body - k, "{\"path\":\"/health\",\"body\":{}}]}");
+  int fd = start(d.port, "/batch", body);
+  ndjson nd;
+  read_ndjson(fd, 120000, 0, &nd); /* fails on a line that is not JSON */
+  close(fd);
+  ASSERT_EQ_INT(nd.status, 200);
+  ASSERT_TRUE(nd.complete);
+  ASSERT_EQ_INT(nd.n, N + 2);
+  for (int i = 0; i < nd.n; i++)
+    ASSERT_TRUE(json_is_object(nd.line[i]));
+  ASSERT_TRUE(json_is_true(json_object_get(nd.line[nd.n - 1], "done")));
+  ASSERT_EQ_INT(
+      (int)json_integer_value(json_object_get(nd.line[nd.n - 1], "ok")), N);
+
+  /* every path allowed is among the items */
+  paths_allowed(&nd, N, list, sizeof list);
+  ASSERT_TRUE(list[0] != 0);
+  for (char *p = list, *e; *p; p = e + (*e ? 2 : 0)) {
+    e = p + strcspn(p, ",");
+    int found = 0;
+    for (int i = 0; i < N; i++)
+      found |= strlen(items[i].path) == (size_t)(e - p) &&
+               !strncmp(items[i].path, p, (size_t)(e - p));
+    if (!found)
+      TEST_FAIL_("an item may ask %.*s, which the test does not send",
+                 (int)(e - p), p);
+    test_checks_++;
+  }
+
+  /* each item's body is the answer to its request alone */
+  for (int i = 0; i < N; i++) {
+    json_t *l = item_line(&nd, i);
+    ASSERT_TRUE(l != NULL);
+    if (!l)
+      continue;
+    ASSERT_EQ_INT((int)json_integer_value(json_object_get(l, "status")), 200);
+    json_t *want = alone(items[i].path, items[i].body ? items[i].body : CHEAP);
+    json_t *got = json_object_get(l, "body");
+    ASSERT_TRUE(want != NULL);
+    if (!want)
+      continue;
+    if (json_is_array(want)) {
+      ASSERT_TRUE(json_is_array(got));
+      drop_seconds(want);
+      drop_seconds(got);
+    }
+    char where[256] = "";
+    if (!same_json(want, got, 0, where, sizeof where))
+      TEST_FAIL_("the %s item differs from the request alone at %s",
+                 items[i].path, where);
+    test_checks_++;
+    json_decref(want);
+  }
+  printf("batch: %d items, one per path (%s), %d lines, each one JSON "
+         "object\n",
+         N, list, nd.n);
+  ndjson_free(&nd);
+  fixture_daemon_stop(&d);
+}
+
 int main(int argc, char **argv) {
   if (fixture_init(argc, argv))
     return 2;
   test_batch();
+  test_every_path();
   TEST_DONE();
 }

@@ -8,6 +8,17 @@
 
 #include "fixture.h"
 
+/* @a j without its "seconds" (the time taken), at any depth: a /map item
+ * of a batch has its map's last line in its body. */
+static void drop_seconds(json_t *j) {
+  const char *k;
+  json_t *v;
+  size_t i;
+  json_object_del(j, "seconds");
+  json_object_foreach(j, k, v) drop_seconds(v);
+  json_array_foreach(j, i, v) drop_seconds(v);
+}
+
 /* The lines of NDJSON text @a t as an array ordered by "index" (a batch's
  * items; a map's cells, whose index is an array, in their order), the line
  * without one last, "seconds" dropped; NULL when a line is not JSON. */
@@ -22,7 +33,7 @@ static json_t *ndjson_sorted(const char *t) {
       json_decref(last);
       return NULL;
     }
-    json_object_del(l, "seconds");
+    drop_seconds(l);
     json_t *ix = json_object_get(l, "index");
     if (json_is_array(ix)) { /* a map's cells, in the order written */
       json_array_append_new(a, l);

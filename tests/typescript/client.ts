@@ -86,6 +86,10 @@ export function batchLine(line: S["BatchLine"] | S["BatchDone"]): number {
   if ("done" in line)
     return line.ok + line.failed;
   const b = line.body;
+  if (Array.isArray(b)) {
+    const lines: (S["MapLine"] | S["MapDone"])[] = b;
+    return lines.map(mapLine).reduce((x, y) => x + y, 0);
+  }
   if ("orbits" in b)
     return b.orbits.length;
   if ("final" in b)
