@@ -188,6 +188,101 @@ void api_batch_done(size_t ok, size_t failed, double seconds,
 void api_batch_free(api_batch *b);
 
 /* ------------------------------------------------------------------------ */
+/* Jobs (Prefer: respond-async)                                              */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * A job is a computing request (an endpoint of class API_RUN_COMPUTE or
+ * API_RUN_BATCH) answered later.  The api cuts it into chunks, each computed
+ * on its own (by any replica, in any order its stages allow) into a result
+ * that the server stores; the job's answer is then made of the stored
+ * results alone:
+ *   answer = the results of the visible chunks, in chunk order, concatenated
+ * and it is byte for byte what the synchronous request answers (but for a
+ * time it reports, "seconds").  A chunk that is not visible is work that
+ * later chunks read (api_job_inputs): a /map's full searches, read by the
+ * chunk that spreads them.  Chunks come in stages: every chunk of stage s
+ * may read the results of every chunk of the stages before it, and starts
+ * once they are all stored.
+ *
+ * The cuts: a single answer (/orbit, /simulate, /stability, /continue) is
+ * one visible chunk; a /batch's items are cut in groups of consecutive
+ * items (each chunk: their lines), and a last chunk writes the done line;
+ * a /map's full searches of its lattice are cut in groups, and a last
+ * chunk spreads them and writes the answer; a /basins' rows of cells are
+ * cut in groups.  Progress is told in items: batch items, map or basin
+ * cells (api_job_items).
+ */
+typedef struct api_job api_job;
+
+/**
+ * Parse and check a job's request as the synchronous endpoint @a index
+ * would (the same problems, answered at submission), and cut it.  The same
+ * body gives the same cuts in every process.  0 and *j; or -1, *j NULL and
+ * the problem in @a out.
+ */
+int api_job_open(size_t index, const char *body, size_t len,
+                 const api_limits *lim, api_job **j, api_response *out);
+/** Free a job; NULL-safe. */
+void api_job_free(api_job *j);
+/** The number of chunks (at least 1). */
+size_t api_job_chunks(const api_job *j);
+/** The stage of chunk @a k (0 for the first; stages never decrease with k). */
+int api_job_stage(const api_job *j, size_t k);
+/** What chunk @a k adds to the items done. */
+long api_job_chunk_items(const api_job *j, size_t k);
+/** The items of the whole job (the sum over its chunks). */
+long api_job_items(const api_job *j);
+/** Whether chunk @a k's result is part of the answer. */
+int api_job_visible(const api_job *j, size_t k);
+/** The media type of the answer ("application/json" or
+ *  "application/x-ndjson"). */
+const char *api_job_content_type(const api_job *j);
+/** The bytes the job keeps until it is freed. */
+size_t api_job_held(const api_job *j);
+
+/** How a chunk reads the stored results of the chunks of earlier stages. */
+typedef struct api_job_inputs {
+  /** Chunk @a k's result into *buf (malloc'd by the reader, freed by the
+   *  caller): 0, or -1 when it cannot be read. */
+  int (*read)(void *cls, size_t k, char **buf, size_t *len);
+  void *cls;
+} api_job_inputs;
+
+/**
+ * Compute chunk @a k.  200 and its result in out->body (the bytes to store;
+ * out->len of them); or a problem in @a out (its status), which fails the
+ * job: the job's answer is then that problem.  lim->max_seconds bounds the
+ * chunk (a server sets it from its job limit); srv->cancelled stops it.
+ * Thread-safe for distinct chunks.  Returns out->status.
+ */
+int api_job_run(api_job *j, size_t k, const api_job_inputs *in,
+                const api_limits *lim, const api_server_info *srv,
+                api_response *out);
+
+/** What a server tells of a job, for api_job_status_json. */
+typedef struct api_job_info {
+  const char *id, *path;
+  const char *status; /**< "accepted", "running", "successful", "failed",
+                           "dismissed" */
+  double created, started, updated, finished; /**< epoch seconds; 0: not */
+  long items, items_done;
+  long chunks, chunks_done;
+  const char *message; /**< may be NULL */
+} api_job_info;
+
+/** The status document of a job, {"id", "path", "status", "progress",
+ *  "created", ..., "items": {"done", "total"}, "message", "links"} (OGC API
+ *  - Processes' statusInfo, with links to itself and its results): 200 in
+ *  @a out. */
+int api_job_status_json(const api_job_info *info, api_response *out);
+/** The list of jobs, newest first ({"jobs": [...], "links", "total"}):
+ *  @a n of them from the @a offset-th of @a total; its links page with
+ *  @a limit.  200 in @a out. */
+int api_job_list_json(const api_job_info *jobs, size_t n, long offset,
+                      long limit, long total, api_response *out);
+
+/* ------------------------------------------------------------------------ */
 /* Problems                                                                  */
 /* ------------------------------------------------------------------------ */
 
