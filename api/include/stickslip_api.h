@@ -274,11 +274,18 @@ typedef struct api_job_info {
 /** The status document of a job, {"id", "path", "status", "progress",
  *  "created", ..., "items": {"done", "total"}, "message", "links"} (OGC API
  *  - Processes' statusInfo, with links to itself and its results): 200 in
- *  @a out. */
+ *  @a out.  OGC's own names are there too ("jobID", "type": "process",
+ *  "processID": the path without its slash); a time is RFC 3339 in UTC to
+ *  the millisecond, absent while it has not happened; "progress" is 0-100
+ *  from the items (from the chunks when there are none), 100 only once
+ *  the job is successful; "message" is @a info->message, or the items done
+ *  when NULL; the results' link has OGC's relation
+ *  http://www.opengis.net/def/rel/ogc/1.0/results. */
 int api_job_status_json(const api_job_info *info, api_response *out);
 /** The list of jobs, newest first ({"jobs": [...], "links", "total"}):
- *  @a n of them from the @a offset-th of @a total; its links page with
- *  @a limit.  200 in @a out. */
+ *  @a n of them from the @a offset-th of @a total; its links (rel self,
+ *  next while jobs follow, prev after the first page) are
+ *  /jobs?offset=O&limit=L with @a limit.  200 in @a out. */
 int api_job_list_json(const api_job_info *jobs, size_t n, long offset,
                       long limit, long total, api_response *out);
 
@@ -309,7 +316,8 @@ int api_job_list_json(const api_job_info *jobs, size_t n, long offset,
   X(INTERNAL, 500, "internal", "Internal Server Error")                        \
   X(OVERLOADED, 503, "overloaded", "Service Unavailable")                      \
   X(OUT_OF_MEMORY, 503, "out-of-memory", "Service Unavailable")                \
-  X(SHUTTING_DOWN, 503, "shutting-down", "Service Unavailable")
+  X(SHUTTING_DOWN, 503, "shutting-down", "Service Unavailable")                \
+  X(STORE_UNAVAILABLE, 503, "store-unavailable", "Service Unavailable")
 
 /** The problem types, in the order of API_PROBLEM_MAP. */
 typedef enum api_problem_kind {
