@@ -6,7 +6,8 @@
  * (MHD_USE_EPOLL_INTERNAL_THREAD): an idle or slow connection costs a
  * socket, not a thread.  Its callbacks are request.c's (a request) and
  * monitor.c's (a connection); computations run in the pool (pool.c); a
- * monitor thread (monitor.c) watches the connections.
+ * monitor thread (monitor.c) watches the connections; jobs have their own
+ * runners and ticker (jobs.c).
  */
 #define _GNU_SOURCE
 #include <arpa/inet.h>
@@ -34,6 +35,8 @@ static char *metrics_text(void *cls) {
   srv_pool_load_t load;
   srv_pool_load(d->pool, &load);
   srv_metrics_pool(d->metrics, &load);
+  if (d->jobs)
+    srv__jobs_metrics(d->jobs);
   return srv_metrics_render(d->metrics);
 }
 
@@ -110,6 +113,7 @@ static void daemon_free(struct srv_daemon *d) {
     atomic_store(&d->monitor_stop, 1);
     pthread_join(d->monitor, NULL);
   }
+  srv__jobs_free(d->jobs);
   srv_pool_free(d->pool);
   srv_metrics_free(d->metrics);
   srv__tally_free(d->held);
@@ -156,6 +160,7 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     return NULL;
   }
   srv_metrics_build(d->metrics, api_version(), d->transport);
+
   if (listen_address(cfg, &ss, &flags)) {
     fprintf(stderr, "stickslipd: --bind %s is not an IPv4 or IPv6 address\n",
             cfg->bind);
@@ -190,6 +195,10 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
             port);
   else
     fprintf(stderr, "stickslipd listening on http://%s:%d\n", cfg->bind, port);
+  /* after the line that tells the URL, which a supervisor reads first; no
+   * client knows the URL before it */
+  if (!cfg->no_jobs && !(d->jobs = srv__jobs_start(d)))
+    fprintf(stderr, "stickslipd: out of memory for jobs: none are kept\n");
   fflush(stderr);
   return d;
 }
@@ -221,6 +230,9 @@ void srv_stop(struct srv_daemon *d) {
    * stopped after it; every suspended request is resumed before the
    * daemon stops, as libmicrohttpd requires */
   srv_pool_drain(d->pool);
+  /* the runners stop between chunks: one computing is cancelled, its lease
+   * lapses, and the chunk is left to the store */
+  srv__jobs_stop(d->jobs);
   double until = srv__now() + d->cfg.drain;
   if (!srv_pool_wait_idle(d->pool, d->cfg.drain)) {
     srv_pool_cancel_all(d->pool);

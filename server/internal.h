@@ -6,6 +6,10 @@
  *   reply.c    answers: headers, CORS, gzip, streams, problems, the budget
  *   batch.c    POST /batch: body parsed, and items run, in the pool; lines
  *              streamed as done
+ *   jobs.c     jobs: the store, the runners that compute their chunks, the
+ *              ticker (leases, cancellation, expiry, waiting streams)
+ *   jobs_http.c  jobs over HTTP: Prefer: respond-async, /jobs, its
+ *              results streamed as they are stored
  *   monitor.c  connections: tracking, admission by address, slow clients,
  *              peers gone away
  *   tally.c    counts by client: bytes held, connections
@@ -20,6 +24,7 @@
 #include <microhttpd.h>
 
 #include "server.h"
+#include "store.h"
 
 /* bytes of a streamed answer at a time */
 #define SRV__STREAM_CHUNK (32 * 1024)
@@ -53,6 +58,9 @@ long srv__tally_add(srv__tally *t, const char *key, long delta);
  * whose count is not 0, into *total the sum of all counts. */
 long srv__tally_get(srv__tally *t, const char *key, unsigned *keys,
                     long *total);
+
+typedef struct srv__jobs srv__jobs;
+typedef struct srv__results srv__results;
 
 /* One TCP connection, from NOTIFY_CONNECTION's start to its close. */
 typedef struct srv__conn {
@@ -89,9 +97,17 @@ struct srv_daemon {
   char (*etags)[24]; /* per row: a static answer's validator, or "" */
   srv__tally *held;  /* bytes against the memory budget, by client */
   srv__tally *conns; /* open connections, by peer address */
+  srv__jobs *jobs;   /* NULL: --no-jobs */
 };
 
 typedef struct srv__batch srv__batch;
+
+/* The job resources (jobs_http.c), by the path of a request. */
+enum {
+  SRV__JOBS_LIST = 1, /* /jobs */
+  SRV__JOBS_ONE,      /* /jobs/{id} */
+  SRV__JOBS_RESULTS   /* /jobs/{id}/results */
+};
 
 typedef struct srv__req {
   srv_job job; /* first: a job is its request */
@@ -131,6 +147,15 @@ typedef struct srv__req {
   api_problem_kind p_kind;
   const char *p_allow;
   char p_detail[128];
+  /* jobs (jobs_http.c) */
+  int async; /* a computing POST with Prefer: respond-async: a job */
+  int jobs;  /* a job resource: SRV__JOBS_*, else 0 */
+  int wait;  /* GET /jobs/{id}/results: wait for the chunks not stored */
+  long limit, offset;               /* GET /jobs: the page */
+  char job_id[STORE_ID_LEN + 1];    /* of a job resource */
+  char job_path[32];                /* ... and its endpoint */
+  char location[16 + STORE_ID_LEN]; /* a 201's Location, or "" */
+  srv__results *res;                /* GET /jobs/{id}/results being answered */
 } srv__req;
 
 /* ---- daemon.c ------------------------------------------------------------ */
@@ -142,6 +167,14 @@ double srv__now(void); /* monotonic seconds */
 api_server_info srv__server_info(struct srv_daemon *d, srv_job *job);
 
 /* ---- request.c: libmicrohttpd's callbacks for a request ------------------ */
+
+/* Decide an error answer now (during admission), send it on the next call
+ * of the handler. */
+enum MHD_Result srv__defer(srv__req *r, api_problem_kind kind,
+                           const char *detail, const char *allow);
+/* Queue @a r's work in the pool (resumed with r->ar), or refuse it. */
+enum MHD_Result srv__submit(struct srv_daemon *d, struct MHD_Connection *c,
+                            srv__req *r);
 
 /* Whether the peer @a addr (as text) is a --trusted-proxy. */
 int srv__trusted(const struct srv_daemon *d, const char *addr);
@@ -213,6 +246,74 @@ enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
 /* The request of a batch has completed: what is still in the pool stops.
  * Returns the bytes of the answer written. */
 size_t srv__batch_detach(srv__batch *b);
+
+/* ---- jobs.c: the engine of jobs ------------------------------------------ */
+
+/* Seconds since the epoch (the store's times: replicas compare them). */
+double srv__wall(void);
+
+/* A call to the store, its latency observed: rc = call. */
+#define SRV__TIMED(d, rc, call)                                                \
+  do {                                                                         \
+    double t0_ = srv__now();                                                   \
+    rc = (call);                                                               \
+    srv_metrics_store((d)->metrics, srv__now() - t0_);                         \
+  } while (0)
+
+/* Open the store (a failure is logged: jobs are then answered 503 until it
+ * opens) and start the runners and the ticker.  NULL when out of memory. */
+srv__jobs *srv__jobs_start(struct srv_daemon *d);
+/* The runners stop: a chunk computing is cancelled and not stored (its
+ * lease lapses), the others are left to the store. */
+void srv__jobs_stop(srv__jobs *js);
+/* Stop the ticker, close the store, free; NULL-safe. */
+void srv__jobs_free(srv__jobs *js);
+/* The store, or NULL when it is not open (opening it is tried again, at
+ * most every few seconds). */
+store *srv__jobs_store(srv__jobs *js);
+/* A job was submitted here: wake a runner. */
+void srv__jobs_wake(srv__jobs *js);
+/* Job @a id was dismissed here: its chunks computing stop at once. */
+void srv__jobs_cancel(srv__jobs *js, const char *id);
+/* Job @a id (of endpoint @a path), opened from its stored body, shared by
+ * the few last used (a batch of many chunks is parsed once): the job; or
+ * NULL with its problem in @a out (out->status 0: its body is gone, the
+ * job dismissed or expired; 503: the store failed). */
+api_job *srv__jobs_open(srv__jobs *js, const char *id, const char *path,
+                        api_response *out);
+/* Done with a job of srv__jobs_open. */
+void srv__jobs_release(srv__jobs *js, api_job *j);
+/* The connection of a results stream @a res waits for its next chunk: the
+ * ticker resumes it (srv__results_resume) within TICK_MS. */
+void srv__jobs_wait(srv__jobs *js, srv__results *res);
+/* ... no longer: it has completed. */
+void srv__jobs_unwait(srv__jobs *js, srv__results *res);
+/* The store's counts into the metrics (at most once a second). */
+void srv__jobs_metrics(srv__jobs *js);
+
+/* ---- jobs_http.c: jobs over HTTP ----------------------------------------- */
+
+/* Whether the request's Prefer headers hold respond-async (RFC 7240). */
+int srv__prefers_async(struct MHD_Connection *c);
+/* Admission of a request whose path is a job resource (/jobs...): its
+ * route, id and parameters into @a r, or an answer deferred; 0 when the
+ * path is no job resource. */
+int srv__jobs_admit(struct srv_daemon *d, struct MHD_Connection *c, srv__req *r,
+                    const char *url, const char *method);
+/* The last call of a job resource's request: its answer, or its work in
+ * the pool. */
+enum MHD_Result srv__jobs_answer(struct srv_daemon *d, struct MHD_Connection *c,
+                                 srv__req *r);
+/* On a worker: a job resource's work (a submission: the job stored; a
+ * results request: the job opened), its answer into r->ar. */
+void srv__jobs_run(srv__req *r);
+/* Back on the I/O thread: the answer, or the results' stream. */
+enum MHD_Result srv__jobs_resumed(struct srv_daemon *d,
+                                  struct MHD_Connection *c, srv__req *r);
+/* The ticker resumes a results stream that waited. */
+void srv__results_resume(srv__results *res);
+/* The request of a results stream has completed. */
+void srv__results_detach(srv__results *res);
 
 /* ---- monitor.c ----------------------------------------------------------- */
 

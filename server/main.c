@@ -84,6 +84,19 @@ static const flag FLAGS[] = {
      "MiB that request bodies and answers in flight may hold; new work "
      "over it gets 503, and so does a client's over its share: budget / "
      "(k + 1), k clients holding some"},
+    {"--job-workers", F_UNSIGNED, 0, 1024, CFG(job_workers),
+     "threads computing chunks of jobs, beside --workers (0: this replica "
+     "computes none)"},
+    {"--job-max-seconds", F_DOUBLE, 1e-3, 1e8, CFG(job_max_seconds),
+     "compute time of one job, from its start, seconds"},
+    {"--job-lease", F_DOUBLE, 0.5, 3600, CFG(job_lease),
+     "seconds a replica's claim of a chunk holds unless renewed (every "
+     "third of it): how long a chunk of a replica that died waits"},
+    {"--job-ttl", F_DOUBLE, 1, 1e10, CFG(job_ttl),
+     "seconds a finished job is kept after it finished"},
+    {"--max-job-body", F_SIZE, 64, 1e12, CFG(max_job_body),
+     "request body limit of a job (Prefer: respond-async), bytes; it is "
+     "held against --memory-budget while it comes"},
 };
 #define N_FLAGS (sizeof FLAGS / sizeof FLAGS[0])
 
@@ -149,6 +162,16 @@ static void usage(FILE *f, const srv_config *defaults) {
       "                            browser (repeatable, up to %d; none)\n",
       SRV_MAX_ORIGINS);
   fprintf(f,
+          "  --job-store URI           the store of jobs: sqlite:PATH, or\n"
+          "                            postgresql://... shared by replicas\n"
+          "                            (sqlite:<state-dir>/jobs.sqlite); the\n"
+          "                            daemon serves without it, jobs get 503\n"
+          "  --state-dir DIR           where the default store is kept\n"
+          "                            ($STATE_DIRECTORY, else\n"
+          "                            ./stickslip-state)\n"
+          "  --no-jobs                 no store: Prefer: respond-async is\n"
+          "                            ignored, /jobs is 404\n");
+  fprintf(f,
           "  --log-format json|plain   the access log's lines: JSON (time,\n"
           "                            request_id, client, method, path,\n"
           "                            status, bytes, us) or plain (json)\n"
@@ -197,6 +220,11 @@ static void defaults(srv_config *cfg) {
   /* longer than a computation may take, so that the requests in flight at
    * a shutdown get their answers */
   cfg->drain = 15;
+  cfg->job_workers = 1;
+  cfg->job_max_seconds = 86400;
+  cfg->job_ttl = 7 * 86400;
+  cfg->job_lease = 30;
+  cfg->max_job_body = (size_t)256 << 20;
 }
 
 /* The environment variable of option @a name ("--max-seconds" ->
@@ -262,6 +290,38 @@ static int add_origin(srv_config *cfg, const char *v) {
   return 0;
 }
 
+/* A text option @a name into @a out (n bytes): 0, or -1 when it does not
+ * fit or is missing. */
+static int set_text(char *out, size_t n, const char *name, const char *v) {
+  if (!v || !*v || strlen(v) >= n) {
+    fprintf(stderr, "stickslipd: %s needs a value of at most %zu bytes\n", name,
+            n - 1);
+    return -1;
+  }
+  snprintf(out, n, "%s", v);
+  return 0;
+}
+
+/* The default store, sqlite:<state-dir>/jobs.sqlite; the state directory
+ * is --state-dir, else the first of systemd's $STATE_DIRECTORY (which the
+ * unit's StateDirectory= sets), else ./stickslip-state. */
+static int default_store(srv_config *cfg) {
+  const char *sd = getenv("STATE_DIRECTORY");
+  if (cfg->job_store[0] || cfg->no_jobs)
+    return 0;
+  if (!cfg->state_dir[0] && sd && *sd)
+    snprintf(cfg->state_dir, sizeof cfg->state_dir, "%.*s",
+             (int)strcspn(sd, ":"), sd);
+  if (!cfg->state_dir[0])
+    snprintf(cfg->state_dir, sizeof cfg->state_dir, "./stickslip-state");
+  if (snprintf(cfg->job_store, sizeof cfg->job_store, "sqlite:%s/jobs.sqlite",
+               cfg->state_dir) >= (int)sizeof cfg->job_store) {
+    fprintf(stderr, "stickslipd: --state-dir is too long\n");
+    return -1;
+  }
+  return 0;
+}
+
 /* Every option from the environment (STICKSLIP_...), before the flags. */
 static int from_environment(srv_config *cfg) {
   char name[64];
@@ -286,6 +346,13 @@ static int from_environment(srv_config *cfg) {
   }
   if ((env = getenv("STICKSLIP_QUIET")) && *env)
     cfg->quiet = strcmp(env, "0") != 0;
+  if ((env = getenv("STICKSLIP_NO_JOBS")) && *env)
+    cfg->no_jobs = strcmp(env, "0") != 0;
+  if (((env = getenv("STICKSLIP_JOB_STORE")) && *env &&
+       set_text(cfg->job_store, sizeof cfg->job_store, "--job-store", env)) ||
+      ((env = getenv("STICKSLIP_STATE_DIR")) && *env &&
+       set_text(cfg->state_dir, sizeof cfg->state_dir, "--state-dir", env)))
+    return -1;
   if ((env = getenv("STICKSLIP_LOG_FORMAT")) && *env &&
       set_log_format(cfg, env))
     return -1;
@@ -381,6 +448,14 @@ static int configure(srv_config *cfg, int argc, char **argv) {
       cfg->quiet = 1;
     } else if (!strcmp(a, "--health-check")) {
       check_health = 1;
+    } else if (!strcmp(a, "--no-jobs")) {
+      cfg->no_jobs = 1;
+    } else if (!strcmp(a, "--job-store") || !strcmp(a, "--state-dir")) {
+      int store = !strcmp(a, "--job-store");
+      if (set_text(store ? cfg->job_store : cfg->state_dir,
+                   store ? sizeof cfg->job_store : sizeof cfg->state_dir, a, v))
+        return 2;
+      i++;
     } else if (!strcmp(a, "--bind") && v && strlen(v) < sizeof cfg->bind) {
       snprintf(cfg->bind, sizeof cfg->bind, "%s", v);
       i++;
@@ -404,7 +479,7 @@ static int configure(srv_config *cfg, int argc, char **argv) {
       return 2;
     }
   }
-  return 0;
+  return default_store(cfg) ? 2 : 0;
 }
 
 int main(int argc, char **argv) {

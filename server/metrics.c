@@ -1,11 +1,15 @@
 /*
  * metrics.c: counters and latency histograms in the Prometheus text format.
- * The endpoint labels are the api's endpoint table; requests are counted by
- * their exact status; the process metrics are those Prometheus's client
- * libraries export (CPU, memory, descriptors, start time).
+ * The endpoint labels are the api's endpoint table, "jobs" for the job
+ * resources and "other"; requests are counted by their exact status; the
+ * jobs by status and the chunks pending are the store's (shared by
+ * replicas), the chunks computed this replica's; the process metrics are
+ * those Prometheus's client libraries export (CPU, memory, descriptors,
+ * start time).
  */
 #define _GNU_SOURCE
 #include <dirent.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -33,13 +37,19 @@ typedef struct ep_metrics {
 } ep_metrics;
 
 struct srv_metrics {
-  size_t n; /* endpoints + "other" */
+  size_t n; /* endpoints + "other" + "jobs" */
   ep_metrics *ep;
   atomic_long in_flight;
   atomic_ulong rejected_busy, cancelled, slow, rejected_memory;
   atomic_long held, held_peak;
   atomic_uint workers, busy, waiting, clients; /* the pool's load */
   double start_time;                           /* since the epoch */
+  /* jobs: chunks computed here, the store's latency, the store's counts */
+  atomic_ulong job_chunks;
+  atomic_ulong store_ns_sum, store_bucket[SRV_BUCKETS + 1];
+  pthread_mutex_t jobs_mu;
+  int jobs_known;
+  long jobs_by_status[5], jobs_pending;
   char build[160]; /* the labels of stickslip_build_info */
 };
 
@@ -47,11 +57,12 @@ srv_metrics *srv_metrics_new(void) {
   srv_metrics *m = calloc(1, sizeof *m);
   if (!m)
     return NULL;
-  m->n = api_endpoint_count() + 1;
+  m->n = api_endpoint_count() + 2;
   if (!(m->ep = calloc(m->n, sizeof *m->ep))) {
     free(m);
     return NULL;
   }
+  pthread_mutex_init(&m->jobs_mu, NULL);
   struct timespec ts;
   clock_gettime(CLOCK_REALTIME, &ts);
   m->start_time = (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
@@ -65,19 +76,32 @@ void srv_metrics_build(srv_metrics *m, const char *version,
 }
 
 void srv_metrics_free(srv_metrics *m) {
-  if (m)
+  if (m) {
     free(m->ep);
+    pthread_mutex_destroy(&m->jobs_mu);
+  }
   free(m);
 }
 
+/* The rows: the endpoints, "other" (api_endpoint_count(), which is also
+ * what a batch's item of no endpoint and a request not routed have), and
+ * "jobs" last. */
+size_t srv_metrics_jobs_row(void) { return api_endpoint_count() + 1; }
+
 static const char *label(const srv_metrics *m, size_t i) {
-  return i + 1 < m->n ? api_endpoint_at(i)->label : "other";
+  return i + 2 < m->n   ? api_endpoint_at(i)->label
+         : i + 1 < m->n ? "other"
+                        : "jobs";
+}
+
+/* The row of @a ep: "other" for anything that is no row. */
+static size_t row(const srv_metrics *m, size_t ep) {
+  return ep < m->n ? ep : m->n - 2;
 }
 
 void srv_metrics_observe(srv_metrics *m, size_t ep, int status,
                          double seconds) {
-  if (ep >= m->n - 1)
-    ep = m->n - 1;
+  ep = row(m, ep);
   if (status < 100 || status > 599)
     status = 500;
   ep_metrics *e = &m->ep[ep];
@@ -90,8 +114,7 @@ void srv_metrics_observe(srv_metrics *m, size_t ep, int status,
 }
 
 void srv_metrics_batch_item(srv_metrics *m, size_t ep, int status) {
-  if (ep >= m->n - 1)
-    ep = m->n - 1;
+  ep = row(m, ep);
   if (status < 100 || status > 599)
     status = 500;
   atomic_fetch_add(&m->ep[ep].batch_status[status - 100], 1);
@@ -102,6 +125,29 @@ void srv_metrics_pool(srv_metrics *m, const srv_pool_load_t *load) {
   atomic_store(&m->busy, load->running);
   atomic_store(&m->waiting, load->waiting);
   atomic_store(&m->clients, load->clients);
+}
+
+void srv_metrics_job_chunk(srv_metrics *m) {
+  atomic_fetch_add(&m->job_chunks, 1);
+}
+
+void srv_metrics_store(srv_metrics *m, double seconds) {
+  int b = 0;
+  while (b < SRV_BUCKETS && seconds > BOUNDS[b])
+    b++;
+  atomic_fetch_add(&m->store_bucket[b], 1);
+  atomic_fetch_add(&m->store_ns_sum, (unsigned long)(seconds * 1e9));
+}
+
+void srv_metrics_jobs(srv_metrics *m, int known, const long by_status[5],
+                      long pending) {
+  pthread_mutex_lock(&m->jobs_mu);
+  m->jobs_known = known;
+  if (known) {
+    memcpy(m->jobs_by_status, by_status, sizeof m->jobs_by_status);
+    m->jobs_pending = pending;
+  }
+  pthread_mutex_unlock(&m->jobs_mu);
 }
 
 void srv_metrics_busy(srv_metrics *m) {
@@ -166,24 +212,53 @@ static void put(sbuf *s, const char *fmt, ...) {
   }
 }
 
-static void histogram(sbuf *s, const char *name, ep_metrics *e) {
+/* A histogram @a metric of the BOUNDS, its series labelled @a labels
+ * (with a trailing comma, or ""). */
+static void histogram(sbuf *s, const char *metric, const char *labels,
+                      atomic_ulong *bucket, atomic_ulong *ns_sum) {
   unsigned long cum = 0;
   for (int b = 0; b < SRV_BUCKETS; b++) {
-    cum += atomic_load(&e->latency_bucket[b]);
-    put(s,
-        "stickslip_request_duration_seconds_bucket{endpoint=\"%s\",le=\"%g\"}"
-        " %lu\n",
-        name, BOUNDS[b], cum);
+    cum += atomic_load(&bucket[b]);
+    put(s, "%s_bucket{%sle=\"%g\"} %lu\n", metric, labels, BOUNDS[b], cum);
   }
-  cum += atomic_load(&e->latency_bucket[SRV_BUCKETS]);
+  cum += atomic_load(&bucket[SRV_BUCKETS]);
+  put(s, "%s_bucket{%sle=\"+Inf\"} %lu\n", metric, labels, cum);
+  size_t n = strlen(labels);
+  /* the sum and the count take the labels without the trailing comma */
+  put(s, "%s_sum%s%.*s%s %.9f\n", metric, n ? "{" : "", n ? (int)n - 1 : 0,
+      labels, n ? "}" : "", 1e-9 * (double)atomic_load(ns_sum));
+  put(s, "%s_count%s%.*s%s %lu\n", metric, n ? "{" : "", n ? (int)n - 1 : 0,
+      labels, n ? "}" : "", cum);
+}
+
+/* The jobs: by status and pending from the store (when it told), the
+ * chunks this replica computed, the store's latency. */
+static void jobs(sbuf *s, srv_metrics *m) {
+  pthread_mutex_lock(&m->jobs_mu);
+  if (m->jobs_known) {
+    static const char *const NAMES[5] = {"accepted", "running", "successful",
+                                         "failed", "dismissed"};
+    put(s, "# HELP stickslip_jobs Jobs in the store by status (every "
+           "replica's).\n# TYPE stickslip_jobs gauge\n");
+    for (int i = 0; i < 5; i++)
+      put(s, "stickslip_jobs{status=\"%s\"} %ld\n", NAMES[i],
+          m->jobs_by_status[i]);
+    put(s,
+        "# HELP stickslip_job_chunk_queue Chunks of jobs waiting to be "
+        "claimed, or leased now.\n# TYPE stickslip_job_chunk_queue gauge\n"
+        "stickslip_job_chunk_queue %ld\n",
+        m->jobs_pending);
+  }
+  pthread_mutex_unlock(&m->jobs_mu);
   put(s,
-      "stickslip_request_duration_seconds_bucket{endpoint=\"%s\",le=\"+Inf\"}"
-      " %lu\n",
-      name, cum);
-  put(s, "stickslip_request_duration_seconds_sum{endpoint=\"%s\"} %.9f\n", name,
-      1e-9 * (double)atomic_load(&e->latency_ns_sum));
-  put(s, "stickslip_request_duration_seconds_count{endpoint=\"%s\"} %lu\n",
-      name, cum);
+      "# HELP stickslip_job_chunks_total Chunks of jobs computed and stored "
+      "by this replica.\n# TYPE stickslip_job_chunks_total counter\n"
+      "stickslip_job_chunks_total %lu\n",
+      atomic_load(&m->job_chunks));
+  put(s, "# HELP stickslip_job_store_seconds Latency of the calls to the job "
+         "store.\n# TYPE stickslip_job_store_seconds histogram\n");
+  histogram(s, "stickslip_job_store_seconds", "", m->store_bucket,
+            &m->store_ns_sum);
 }
 
 /* The process metrics of the Prometheus conventions, from getrusage and
@@ -276,8 +351,12 @@ char *srv_metrics_render(srv_metrics *m) {
   put(&s, "# HELP stickslip_request_duration_seconds Latency from the first "
           "byte of the request to the last byte of the response.\n"
           "# TYPE stickslip_request_duration_seconds histogram\n");
-  for (size_t e = 0; e < m->n; e++)
-    histogram(&s, label(m, e), &m->ep[e]);
+  for (size_t e = 0; e < m->n; e++) {
+    char labels[64];
+    snprintf(labels, sizeof labels, "endpoint=\"%s\",", label(m, e));
+    histogram(&s, "stickslip_request_duration_seconds", labels,
+              m->ep[e].latency_bucket, &m->ep[e].latency_ns_sum);
+  }
   put(&s,
       "# HELP stickslip_requests_in_flight Requests being served.\n"
       "# TYPE stickslip_requests_in_flight gauge\n"
@@ -327,6 +406,7 @@ char *srv_metrics_render(srv_metrics *m) {
       "stickslip_rejected_memory_total %lu\n",
       atomic_load(&m->held), atomic_load(&m->held_peak),
       atomic_load(&m->rejected_memory));
+  jobs(&s, m);
   process(&s, m);
   return s.p;
 }

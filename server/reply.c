@@ -98,11 +98,12 @@ void srv__common_headers(const srv__req *r, struct MHD_Response *resp) {
   if (r->preflight[0]) {
     MHD_add_response_header(resp, "Access-Control-Allow-Methods", r->preflight);
     MHD_add_response_header(resp, "Access-Control-Allow-Headers",
-                            "Content-Type, X-Request-Id");
+                            "Content-Type, X-Request-Id, Prefer");
     MHD_add_response_header(resp, "Access-Control-Max-Age", "600");
   } else {
     MHD_add_response_header(resp, "Access-Control-Expose-Headers",
-                            "X-Request-Id, Retry-After, ETag");
+                            "X-Request-Id, Retry-After, ETag, Location, "
+                            "Preference-Applied");
   }
 }
 
@@ -173,6 +174,11 @@ enum MHD_Result srv__send_body(struct MHD_Connection *c, srv__req *r,
   }
   if (retry_after)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "1");
+  if (r->location[0] && status == 201) {
+    /* a job made of the request (Prefer: respond-async, RFC 7240) */
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_LOCATION, r->location);
+    MHD_add_response_header(resp, "Preference-Applied", "respond-async");
+  }
   if (allow)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_ALLOW, allow);
   if (r->accept_encoding)

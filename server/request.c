@@ -177,8 +177,8 @@ static size_t header_room(struct MHD_Connection *c, const framing *f) {
 }
 
 /* Decide an error answer now, send it on the next call. */
-static enum MHD_Result defer(srv__req *r, api_problem_kind kind,
-                             const char *detail, const char *allow) {
+enum MHD_Result srv__defer(srv__req *r, api_problem_kind kind,
+                           const char *detail, const char *allow) {
   r->p_status = api_problem_status(kind);
   r->p_kind = kind;
   r->p_allow = allow;
@@ -187,14 +187,24 @@ static enum MHD_Result defer(srv__req *r, api_problem_kind kind,
   return MHD_YES;
 }
 
+/* The body limit of request @a r: a job's (Prefer: respond-async) is
+ * --max-job-body, decided from the headers before any byte of the body. */
+static size_t body_limit(const struct srv_daemon *d, const srv__req *r,
+                         const char **name) {
+  *name = r->async ? "max_job_body" : "max_body";
+  return r->async ? d->cfg.max_job_body : d->cfg.lim.max_body;
+}
+
 /* 413: the body is over the limit (from Content-Length, or as it came). */
 static enum MHD_Result too_large(struct srv_daemon *d, struct MHD_Connection *c,
                                  srv__req *r) {
   char detail[128];
+  const char *name;
+  size_t max = body_limit(d, r, &name);
   snprintf(detail, sizeof detail, "the body is over the limit of %zu bytes",
-           d->cfg.lim.max_body);
-  return srv__send_problem(c, r, API_P_BODY_TOO_LARGE, detail, "max_body",
-                           (double)d->cfg.lim.max_body, NULL);
+           max);
+  return srv__send_problem(c, r, API_P_BODY_TOO_LARGE, detail, name,
+                           (double)max, NULL);
 }
 
 /* The request's id: its X-Request-Id when that is 1 to SRV_REQUEST_ID
@@ -265,11 +275,14 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
     return srv__send_problem(c, r, API_P_BAD_REQUEST, bad, NULL, 0, NULL);
   }
   if (atomic_load(&d->draining))
-    return defer(r, API_P_SHUTTING_DOWN, "the server is shutting down", NULL);
+    return srv__defer(r, API_P_SHUTTING_DOWN, "the server is shutting down",
+                      NULL);
+  if (srv__jobs_admit(d, c, r, url, method))
+    return MHD_YES; /* /jobs...: answered on the last call */
   int route = api_route(method, url, &ep);
   if (route == 404)
-    return defer(r, API_P_NOT_FOUND, "no such resource; see /openapi.json",
-                 NULL);
+    return srv__defer(r, API_P_NOT_FOUND, "no such resource; see /openapi.json",
+                      NULL);
   const api_endpoint *row = api_endpoint_at(ep);
   r->ep = ep;
   if (!strcmp(method, "OPTIONS")) {
@@ -281,16 +294,17 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
   if (route == 405) {
     snprintf(r->p_detail, sizeof r->p_detail, "%s takes %s", row->path,
              row->method);
-    return defer(r, API_P_METHOD_NOT_ALLOWED, NULL, row->method);
+    return srv__defer(r, API_P_METHOD_NOT_ALLOWED, NULL, row->method);
   }
   if (row->run_class == API_RUN_INLINE)
     return MHD_YES; /* answered on the next call */
   r->is_post = 1;
+  r->async = d->jobs && srv__prefers_async(c); /* --no-jobs: ignored */
   const char *ct =
       MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Type");
   if (!is_json_type(ct))
-    return defer(r, API_P_MEDIA_TYPE,
-                 "send the body as Content-Type: application/json", NULL);
+    return srv__defer(r, API_P_MEDIA_TYPE,
+                      "send the body as Content-Type: application/json", NULL);
   const char *ce =
       MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Encoding");
   if (ce && strcasecmp(ce, "identity") != 0) {
@@ -301,7 +315,7 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
              "a body with Content-Encoding %.24s is not taken: send it as "
              "identity (uncompressed)",
              ce);
-    return defer(r, API_P_MEDIA_TYPE, detail, NULL);
+    return srv__defer(r, API_P_MEDIA_TYPE, detail, NULL);
   }
   const char *cl =
       MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Content-Length");
@@ -309,7 +323,8 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
     char *end;
     errno = 0;
     unsigned long long n = strtoull(cl, &end, 10);
-    if (errno == ERANGE || n > d->cfg.lim.max_body)
+    const char *name;
+    if (errno == ERANGE || n > body_limit(d, r, &name))
       return too_large(d, c, r);
   }
   return MHD_YES;
@@ -320,15 +335,16 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
 /* A piece of the body: kept while it fits the limit, counted over it. */
 static enum MHD_Result take_body(struct srv_daemon *d, srv__req *r,
                                  const char *data, size_t n) {
-  if (r->len + n > d->cfg.lim.max_body) {
+  const char *name;
+  size_t max = body_limit(d, r, &name);
+  if (r->len + n > max) {
     /* libmicrohttpd takes no answer while a body comes: written to the
      * socket, so that a chunk that never ends (a chunk size of 2^64-1)
      * is not waited for */
     char detail[128];
     snprintf(detail, sizeof detail, "the body is over the limit of %zu bytes",
-             d->cfg.lim.max_body);
-    srv__send_raw_problem(r, API_P_BODY_TOO_LARGE, detail, "max_body",
-                          (double)d->cfg.lim.max_body);
+             max);
+    srv__send_raw_problem(r, API_P_BODY_TOO_LARGE, detail, name, (double)max);
     return MHD_YES;
   }
   if (r->over_budget || srv__over_budget(d, r->key)) {
@@ -386,6 +402,8 @@ static void job_run(srv_job *j) {
   srv__req *r = (srv__req *)j;
   if (srv__over_budget(r->d, r->key))
     srv__budget_problem(r->d, r->key, &r->ar);
+  else if (r->async || r->jobs)
+    srv__jobs_run(r);
   else if (api_endpoint_at(r->ep)->run_class == API_RUN_BATCH)
     srv__batch_open(r);
   else
@@ -428,8 +446,8 @@ static const srv_job_ops REQUEST_JOB = {job_queued, job_run, job_done,
                                         job_gone};
 
 /* Queue the computation, or refuse it at once. */
-static enum MHD_Result submit(struct srv_daemon *d, struct MHD_Connection *c,
-                              srv__req *r) {
+enum MHD_Result srv__submit(struct srv_daemon *d, struct MHD_Connection *c,
+                            srv__req *r) {
   r->job.ops = &REQUEST_JOB;
   int rc = srv_pool_submit(d->pool, &r->job, r->key);
   if (rc == 0)
@@ -461,7 +479,7 @@ static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
     srv__budget_problem(d, r->key, &ar);
     return srv__send_api(c, r, &ar, NULL);
   }
-  return submit(d, c, r);
+  return srv__submit(d, c, r);
 }
 
 /* ---- libmicrohttpd's callbacks ------------------------------------------- */
@@ -489,8 +507,9 @@ enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
     return MHD_YES;
   }
   if (r->answered) /* resumed by the pool */
-    return r->ab ? srv__batch_start(d, c, r)
-                 : srv__send_api(c, r, &r->ar, NULL);
+    return r->ab     ? srv__batch_start(d, c, r)
+           : r->jobs ? srv__jobs_resumed(d, c, r)
+                     : srv__send_api(c, r, &r->ar, NULL);
   if (r->done || r->p_status) {
     /* an answer is decided: discard whatever body still comes */
     if (*upload_data_size || r->done) {
@@ -508,6 +527,8 @@ enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
   srv__receiving(d, r->cn, 0);
   if (r->preflight[0])
     return srv__send_body(c, r, 204, NULL, 0, NULL, 0, r->preflight, 0);
+  if (r->jobs)
+    return srv__jobs_answer(d, c, r);
   if (!r->is_post) {
     api_response ar;
     if (d->etags[r->ep][0]) {
@@ -612,6 +633,8 @@ void srv__completed(void *cls, struct MHD_Connection *c, void **con_cls,
   srv_metrics_in_flight(d->metrics, -1);
   if (r->batch)
     r->bytes = srv__batch_detach(r->batch);
+  if (r->res)
+    srv__results_detach(r->res);
   if (!d->cfg.quiet)
     access_log(d, r, status, dt);
   /* the next request on this connection has its own deadline */

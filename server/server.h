@@ -41,6 +41,18 @@ typedef struct srv_config {
    *  (scheme://host[:port], or * for any); none by default */
   char origins[SRV_MAX_ORIGINS][128];
   int n_origins;
+  /* jobs (POST with Prefer: respond-async; server/jobs.c) */
+  int no_jobs;            /**< --no-jobs: Prefer: respond-async is ignored */
+  char job_store[512];    /**< --job-store URI ("": no store; stickslipd
+                               defaults to sqlite:<state-dir>/jobs.sqlite) */
+  char state_dir[256];    /**< --state-dir (./stickslip-state, or
+                               $STATE_DIRECTORY) */
+  unsigned job_workers;   /**< --job-workers: runner threads (1) */
+  double job_max_seconds; /**< --job-max-seconds: compute time of a job */
+  double job_ttl;         /**< --job-ttl: seconds a finished job is kept */
+  double job_lease;       /**< --job-lease: seconds a claim of a chunk
+                               holds unless renewed (30) */
+  size_t max_job_body;    /**< --max-job-body: a job's request body */
 } srv_config;
 
 /* ---- the compute pool (pool.c) ----------------------------------------- */
@@ -136,7 +148,10 @@ void srv_metrics_free(srv_metrics *m);
 /* The labels of stickslip_build_info. */
 void srv_metrics_build(srv_metrics *m, const char *version,
                        const char *transport);
-/* @a ep: an endpoint index, or anything out of range for "other". */
+/* The row of the job resources (/jobs...) in srv_metrics_observe. */
+size_t srv_metrics_jobs_row(void);
+/* @a ep: an endpoint index, srv_metrics_jobs_row(), or anything else for
+ * "other". */
 void srv_metrics_observe(srv_metrics *m, size_t ep, int status, double seconds);
 void srv_metrics_busy(srv_metrics *m);      /* a 503 for a full queue */
 void srv_metrics_cancelled(srv_metrics *m); /* work of a client gone away */
@@ -149,6 +164,15 @@ long srv_metrics_in_flight(srv_metrics *m, int delta);
 void srv_metrics_batch_item(srv_metrics *m, size_t ep, int status);
 /* The pool's load, for the next srv_metrics_render. */
 void srv_metrics_pool(srv_metrics *m, const srv_pool_load_t *load);
+/* A chunk of a job computed and stored by this replica. */
+void srv_metrics_job_chunk(srv_metrics *m);
+/* A call to the job store took @a seconds. */
+void srv_metrics_store(srv_metrics *m, double seconds);
+/* The jobs by status (indexed by store_status) and the chunks pending, for
+ * the next srv_metrics_render; @a known 0 when the store could not tell
+ * (no job metrics are rendered then). */
+void srv_metrics_jobs(srv_metrics *m, int known, const long by_status[5],
+                      long pending);
 char *srv_metrics_render(srv_metrics *m); /* malloc'd */
 
 /** Start the daemon; prints the URL to stderr when ready.  NULL on error. */
