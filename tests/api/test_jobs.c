@@ -341,10 +341,9 @@ static double mono(void) {
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* EVIDENCE: README "Jobs": a sweep of a great many items is one request:
- * its job opens in a time proportional to its body (100 000 items, 12 MB,
- * in about 0.2 s; a quadratic step would take minutes) */
-static void test_batch_open_time(void) {
+/* The seconds api_job_open takes for a batch of @a n /orbit items (the
+ * best of two runs), its body's bytes into *bytes. */
+static double open_time(size_t n, size_t *bytes) {
   api_limits lim;
   api_limits_default(&lim);
   lim.max_batch_items = 1000000;
@@ -352,10 +351,9 @@ static void test_batch_open_time(void) {
       "{\"id\":%zu,\"path\":\"/orbit\",\"body\":{\"params\":{\"chi\":0.2,"
       "\"eta\":4,\"us\":0.0724,\"ur\":0.6178,\"V\":1},\"guess\":{"
       "\"durations\":[4.5,2.7,3.05]}}}";
-  size_t n =
-      getenv("SS_JOB_ITEMS") ? (size_t)atol(getenv("SS_JOB_ITEMS")) : 100000;
   size_t cap = n * (sizeof ITEM + 8) + 32, len;
   char *body = malloc(cap);
+  double best = 1e9;
   len = (size_t)snprintf(body, cap, "{\"requests\":[");
   for (size_t i = 0; i < n; i++) {
     if (i)
@@ -363,22 +361,42 @@ static void test_batch_open_time(void) {
     len += (size_t)snprintf(body + len, cap - len, ITEM, i);
   }
   len += (size_t)snprintf(body + len, cap - len, "]}");
-  api_job *j;
-  api_response r;
-  double t0 = mono();
-  int rc = api_job_open(endpoint("/batch"), body, len, &lim, &j, &r);
-  double dt = mono() - t0;
-  printf("a batch of %zu items (%.1f MB) opened as a job in %.3f s\n", n,
-         (double)len / 1e6, dt);
-  ASSERT_EQ_INT(rc, 0);
-  if (rc == 0) {
-    ASSERT_EQ_INT(api_job_chunks(j), n / 32 + (n % 32 != 0) + 1);
-    ASSERT_EQ_INT(api_job_items(j), n);
-    api_job_free(j);
+  for (int run = 0; run < 2; run++) {
+    api_job *j;
+    api_response r;
+    double t0 = mono();
+    int rc = api_job_open(endpoint("/batch"), body, len, &lim, &j, &r);
+    double dt = mono() - t0;
+    best = dt < best ? dt : best;
+    ASSERT_EQ_INT(rc, 0);
+    if (rc == 0) {
+      ASSERT_EQ_INT(api_job_chunks(j), n / 32 + (n % 32 != 0) + 1);
+      ASSERT_EQ_INT(api_job_items(j), n);
+      api_job_free(j);
+    }
   }
-  /* under the sanitizers the same work takes several times longer */
-  ASSERT_TRUE(dt < (getenv("SS_SLOW_BUILD") ? 5.0 : 1.0));
   free(body);
+  *bytes = len;
+  return best;
+}
+
+/* EVIDENCE: README "Jobs": a sweep of a great many items is one request:
+ * its job opens in a time proportional to its body.  100 000 items (13 MB)
+ * open in about 0.5 s on a quiet machine; the check is on the growth (4
+ * times the items in about 4 times the time, where a quadratic step would
+ * take 16) and on a bound the shared machine keeps, not on a time */
+static void test_batch_open_time(void) {
+  size_t n = getenv("SS_JOB_ITEMS") ? (size_t)atol(getenv("SS_JOB_ITEMS"))
+                                    : 100000,
+         small, large;
+  double ts = open_time(n / 4, &small), tl = open_time(n, &large);
+  printf("a batch of %zu items (%.1f MB) opened as a job in %.3f s, of %zu "
+         "in %.3f s: %.1f times the time for %.1f times the bytes\n",
+         n, (double)large / 1e6, tl, n / 4, ts, tl / ts,
+         (double)large / (double)small);
+  ASSERT_TRUE(tl / ts < 8);
+  /* under the sanitizers the same work takes several times longer */
+  ASSERT_TRUE(tl < (getenv("SS_SLOW_BUILD") ? 20.0 : 3.0));
 }
 
 /* A server that cancelled the job. */
