@@ -247,6 +247,10 @@ typedef struct api_job_inputs {
    *  caller): 0, or -1 when it cannot be read. */
   int (*read)(void *cls, size_t k, char **buf, size_t *len);
   void *cls;
+  /** When the job started (epoch seconds, as api_job_info.started), for
+   *  the time its answer reports (a /batch's done line: the seconds since);
+   *  0 when not known (the time is then 0). */
+  double started;
 } api_job_inputs;
 
 /**

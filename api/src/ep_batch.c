@@ -23,6 +23,7 @@
 
 #include "endpoints.h"
 #include "decode.h"
+#include "job.h"
 #include "problem.h"
 #include "writer.h"
 
@@ -112,10 +113,11 @@ static int check_item(const json_t *v, batch_item *it, api_err *e) {
   if (!json_is_string(path))
     return api__fail(e, API_P_INVALID_TYPE, "/path",
                      "\"path\" must be a string such as \"/orbit\"");
-  computing_paths(paths, sizeof paths);
   const char *ps = json_string_value(path);
   size_t ep;
   int route = api_route("POST", ps, &ep);
+  if (route != 200 || api_endpoint_at(ep)->run_class != API_RUN_COMPUTE)
+    computing_paths(paths, sizeof paths); /* for the message */
   if (route == 404)
     return api__fail(e, API_P_NOT_FOUND, "/path",
                      "no endpoint %.60s; an item may ask %s", ps, paths);
@@ -133,6 +135,34 @@ static int check_item(const json_t *v, batch_item *it, api_err *e) {
                      "\"body\" must be an object, the request for %s", ps);
   if (!(it->body = api__dump(body, &it->len)))
     return api__fail(e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  return 0;
+}
+
+/* A batch of @a n items, each to be set; NULL when out of memory. */
+static api_batch *batch_new(size_t n, const api_call *c) {
+  api_batch *b = calloc(1, sizeof *b);
+  if (!b || !(b->items = calloc(n, sizeof *b->items))) {
+    free(b);
+    api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+    return NULL;
+  }
+  b->n = n;
+  return b;
+}
+
+/* Item @a i from its JSON @a v: checked, kept, or refused on its own line;
+ * -1 only when out of memory. */
+static int item_set(api_batch *b, size_t i, const json_t *v,
+                    const api_call *c) {
+  batch_item *it = &b->items[i];
+  api_err e;
+  memset(&e, 0, sizeof e);
+  if (check_item(v, it, &e) != 0) {
+    if (e.kind == API_P_OUT_OF_MEMORY || !(it->bad = malloc(sizeof e)))
+      return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+    *it->bad = e;
+  }
+  b->held += it->len + (it->id ? strlen(it->id) : 0) + sizeof *it;
   return 0;
 }
 
@@ -172,27 +202,12 @@ static api_batch *batch_of(const json_t *root, const api_call *c) {
                n, c->lim->max_batch_items);
     return NULL;
   }
-  api_batch *b = calloc(1, sizeof *b);
-  if (!b || !(b->items = calloc(n, sizeof *b->items))) {
-    free(b);
-    api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
-    return NULL;
-  }
-  b->n = n;
-  for (size_t i = 0; i < n; i++) {
-    batch_item *it = &b->items[i];
-    api_err e;
-    memset(&e, 0, sizeof e);
-    if (check_item(json_array_get(rq, i), it, &e) != 0) {
-      if (e.kind == API_P_OUT_OF_MEMORY || !(it->bad = malloc(sizeof e))) {
-        api_batch_free(b);
-        api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
-        return NULL;
-      }
-      *it->bad = e;
+  api_batch *b = batch_new(n, c);
+  for (size_t i = 0; b && i < n; i++)
+    if (item_set(b, i, json_array_get(rq, i), c) != 0) {
+      api_batch_free(b);
+      return NULL;
     }
-    b->held += it->len + (it->id ? strlen(it->id) : 0) + sizeof *it;
-  }
   return b;
 }
 
@@ -311,20 +326,29 @@ static int drain(api_wbuf *w, api_stream *s) {
   return k < 0 || w->oom ? -1 : 0;
 }
 
+/* Serve item @a i and append its line to @a w: its status, or -1 when out
+ * of memory (recorded in c->e). */
+static int serve_line(api_batch *b, size_t i, const api_call *c, api_wbuf *w) {
+  api_response r;
+  size_t held;
+  int status = api_batch_run(b, i, c->lim, c->srv, &r);
+  api_stream *line = api_batch_line(b, i, &r, &held);
+  if (!line || drain(w, line) != 0)
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL,
+                     "the answer could not be written: out of memory");
+  return status;
+}
+
 int ep_batch_run(void *xp, const api_call *c) {
   batch_x *x = xp;
   for (size_t i = 0; i < x->b->n; i++) {
-    api_response r;
-    size_t held;
-    api_batch_run(x->b, i, c->lim, c->srv, &r);
-    if (r.status == 200)
+    int status = serve_line(x->b, i, c, &x->text);
+    if (status < 0)
+      return -1;
+    if (status == 200)
       x->ok++;
     else
       x->failed++;
-    api_stream *line = api_batch_line(x->b, i, &r, &held);
-    if (!line || drain(&x->text, line) != 0)
-      return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL,
-                       "the answer could not be written: out of memory");
   }
   api_response done;
   api_batch_done(x->ok, x->failed, now() - x->t0, &done);
@@ -355,4 +379,265 @@ void ep_batch_release(void *xp) {
   api_batch_free(x->b);
   free(x->text.p);
   free(x);
+}
+
+/* ---- the endpoint as a job -----------------------------------------------
+ *
+ * A batch's job is cut into chunks of BATCH_CHUNK consecutive items, all in
+ * stage 0: a chunk's result is the lines of its items in index order, each
+ * as the endpoint above writes it (serve_line), so that the chunks in order
+ * are the batch's lines.  A last chunk, in stage 1, writes the done line
+ * from their results: the items' statuses are read back from their lines.
+ *
+ * Why 32 items: a chunk should be long enough that the store's cost for it
+ * (a claim, a lease, a result written; milliseconds) is a small share of
+ * it, and short enough that progress moves and that a chunk lost with its
+ * replica costs little to compute again.  The common item, an /orbit
+ * search, takes about 15 ms (2000 of them in 31 s), so 32 of them are about
+ * half a second; a batch of /simulate or /stability items is cheaper, one
+ * of /map items dearer, and the count is the same for all, so that the
+ * same body is cut the same way everywhere.
+ */
+enum { BATCH_CHUNK = 32 };
+
+ep_job_cut_fn ep_batch_job_cut;
+ep_job_run_fn ep_batch_job_run;
+
+/*
+ * A job's body may be far larger than a synchronous one (a sweep of a
+ * million items), and jansson's tree of it is some twenty times its size
+ * (100 000 /orbit items: 13 MB of text, 250 MB of tree, most of the second
+ * it takes to open).  So a batch job's body of the usual shape,
+ *   {"requests": [item, item, ...]}
+ * with nothing else and only JSON whitespace between, is read an item at a
+ * time: each item delimited in the text, parsed alone and kept as the
+ * whole body's parse would keep it, its tree freed at once.  Any other
+ * body, and any item or nesting that jansson or the depth limit would
+ * refuse, is left to the whole parse (0), which then answers exactly what
+ * the synchronous request answers.
+ */
+static const char *skip_ws(const char *p, const char *end) {
+  while (p < end && (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r'))
+    p++;
+  return p;
+}
+
+/* The end of the JSON value at @a p, which only delimits it (jansson
+ * checks it), and its nesting depth in *depth; NULL when it does not end. */
+static const char *value_end(const char *p, const char *end, int *depth) {
+  int d = 0;
+  *depth = 0;
+  for (; p < end; p++) {
+    char ch = *p;
+    if (ch == '"') {
+      for (p++; p < end && *p != '"'; p++)
+        p += *p == '\\';
+      if (p >= end)
+        return NULL;
+      if (d == 0)
+        return p + 1;
+    } else if (ch == '{' || ch == '[') {
+      if (++d > *depth)
+        *depth = d;
+    } else if (ch == '}' || ch == ']') {
+      if (d == 0)
+        return p;
+      if (--d == 0)
+        return p + 1;
+    } else if (d == 0 && (ch == ',' || ch == ' ' || ch == '\t' || ch == '\n' ||
+                          ch == '\r')) {
+      return p;
+    }
+  }
+  return d == 0 ? p : NULL;
+}
+
+/* The items of @a body, counted (@a b NULL) or set: 1, 0 when the body is
+ * not of the usual shape or an item is not one jansson reads, -1 when out
+ * of memory. */
+static int items_of_text(const char *body, size_t len, const api_call *c,
+                         api_batch *b, size_t *n) {
+  static const char HEAD[] = "\"requests\"";
+  const char *p = skip_ws(body, body + len), *end = body + len;
+  int depth;
+  *n = 0;
+  if (p == end || *p != '{')
+    return 0;
+  p = skip_ws(p + 1, end);
+  if ((size_t)(end - p) < sizeof HEAD - 1 || memcmp(p, HEAD, sizeof HEAD - 1))
+    return 0;
+  p = skip_ws(p + sizeof HEAD - 1, end);
+  if (p == end || *p != ':')
+    return 0;
+  p = skip_ws(p + 1, end);
+  if (p == end || *p != '[')
+    return 0;
+  int comma = 0; /* the last thing read was a comma */
+  for (p = skip_ws(p + 1, end); p < end && *p != ']';) {
+    const char *q = value_end(p, end, &depth);
+    if (!q || q == p || depth + 2 > c->lim->max_depth)
+      return 0;
+    if (b) {
+      json_error_t jerr;
+      json_t *v = json_loadb(p, (size_t)(q - p), JSON_REJECT_DUPLICATES, &jerr);
+      if (!v)
+        return 0;
+      int rc = item_set(b, *n, v, c);
+      json_decref(v);
+      if (rc != 0)
+        return -1;
+    }
+    (*n)++;
+    p = skip_ws(q, end);
+    comma = p < end && *p == ',';
+    if (comma)
+      p = skip_ws(p + 1, end);
+    else if (p == end || *p != ']')
+      return 0;
+  }
+  if (p == end || comma)
+    return 0; /* no closing bracket, or a comma before it */
+  p = skip_ws(p + 1, end);
+  return p < end && *p == '}' && skip_ws(p + 1, end) == end;
+}
+
+ep_job_open_fn ep_batch_job_open;
+
+int ep_batch_job_open(const char *body, size_t len, const api_call *c,
+                      void **xp) {
+  size_t n, set;
+  if (items_of_text(body, len, c, NULL, &n) != 1 || n == 0 ||
+      n > c->lim->max_batch_items)
+    return 0;
+  batch_x *x = api__alloc(sizeof *x, xp, c);
+  if (!x || !(x->b = batch_new(n, c)))
+    return -1;
+  int rc = items_of_text(body, len, c, x->b, &set);
+  if (rc == 1 && set == n)
+    return 1;
+  ep_batch_release(x);
+  *xp = NULL;
+  return rc < 0 ? -1 : 0;
+}
+
+static size_t groups_of(const api_batch *b) {
+  return (b->n + BATCH_CHUNK - 1) / BATCH_CHUNK;
+}
+
+int ep_batch_job_cut(const void *xp, const api_call *c, api_job_cut *cut) {
+  const batch_x *x = xp;
+  size_t groups = groups_of(x->b);
+  if (api__job_cut_alloc(cut, groups + 1, c) != 0)
+    return -1;
+  for (size_t k = 0; k < groups; k++) {
+    size_t end =
+        (k + 1) * BATCH_CHUNK < x->b->n ? (k + 1) * BATCH_CHUNK : x->b->n;
+    cut->items[k] = (long)(end - k * BATCH_CHUNK);
+    cut->visible[k] = 1;
+  }
+  cut->stage[groups] = 1; /* the done line, once every line is stored */
+  cut->visible[groups] = 1;
+  return 0;
+}
+
+/* The lines of items @a from to @a to (excluded), in @a out. */
+static int chunk_lines(api_batch *b, size_t from, size_t to, const api_call *c,
+                       api_response *out) {
+  api_wbuf w = {NULL, 0, 0, 0};
+  for (size_t i = from; i < to; i++)
+    if (serve_line(b, i, c, &w) < 0) {
+      free(w.p);
+      return -1;
+    }
+  out->status = 200;
+  out->content_type = "application/x-ndjson";
+  out->body = w.p ? w.p : calloc(1, 1);
+  out->len = w.len;
+  out->held = w.len;
+  return out->body
+             ? 0
+             : api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+}
+
+/* Count the statuses of chunk @a k's lines (items @a from to @a to) in
+ * @a text: each line is {"id":ID,"index":I,"status":S,... as
+ * api_batch_line wrote it, ID the item's own, so that its status is read
+ * at a known place without parsing the line's body.  0, or -1 when the
+ * text is not those lines. */
+static int count_lines(const api_batch *b, size_t from, size_t to,
+                       const char *text, size_t len, size_t *ok,
+                       size_t *failed) {
+  const char *p = text, *end = text + len;
+  for (size_t i = from; i < to; i++) {
+    const char *id = b->items[i].id ? b->items[i].id : "null";
+    char head[64];
+    size_t idn = strlen(id);
+    int hn = snprintf(head, sizeof head, ",\"index\":%zu,\"status\":", i);
+    if ((size_t)(end - p) < 6 + idn + (size_t)hn || memcmp(p, "{\"id\":", 6) ||
+        memcmp(p + 6, id, idn) || memcmp(p + 6 + idn, head, (size_t)hn))
+      return -1;
+    p += 6 + idn + (size_t)hn;
+    int status = 0;
+    while (p < end && *p >= '0' && *p <= '9')
+      status = 10 * status + (*p++ - '0');
+    if (status == 200)
+      (*ok)++;
+    else
+      (*failed)++;
+    const char *nl = memchr(p, '\n', (size_t)(end - p));
+    if (!nl)
+      return -1;
+    p = nl + 1;
+  }
+  return p == end ? 0 : -1;
+}
+
+static double epoch_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* The done line, from the stored lines of the @a groups chunks before it.
+ * Its "seconds" is the time since the job started when the server tells
+ * it (in->started), as the synchronous batch's is the time since it
+ * started: an item's own compute time is not in its line, which is stored
+ * exactly as the synchronous answer has it. */
+static int done_line(const api_batch *b, size_t groups,
+                     const api_job_inputs *in, const api_call *c,
+                     api_response *out) {
+  size_t ok = 0, failed = 0;
+  for (size_t k = 0; k < groups; k++) {
+    char *text = NULL;
+    size_t len = 0;
+    size_t to = (k + 1) * BATCH_CHUNK < b->n ? (k + 1) * BATCH_CHUNK : b->n;
+    if (!in || !in->read || in->read(in->cls, k, &text, &len) != 0)
+      return api__fail(c->e, API_P_STORE_UNAVAILABLE, NULL,
+                       "the lines of chunk %zu could not be read from the "
+                       "job store",
+                       k);
+    int bad = count_lines(b, k * BATCH_CHUNK, to, text, len, &ok, &failed);
+    free(text);
+    if (bad)
+      return api__fail(c->e, API_P_INTERNAL, NULL,
+                       "the stored result of chunk %zu is not the lines of "
+                       "its items",
+                       k);
+  }
+  double seconds = in->started > 0 ? epoch_now() - in->started : 0;
+  api_batch_done(ok, failed, seconds > 0 ? seconds : 0, out);
+  return out->len ? 0
+                  : api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+}
+
+int ep_batch_job_run(const void *xp, size_t k, const api_job_inputs *in,
+                     const api_call *c, api_response *out) {
+  const batch_x *x = xp; /* read only: x->b's items serve themselves */
+  size_t groups = groups_of(x->b);
+  if (k < groups)
+    return chunk_lines(x->b, k * BATCH_CHUNK,
+                       (k + 1) * BATCH_CHUNK < x->b->n ? (k + 1) * BATCH_CHUNK
+                                                       : x->b->n,
+                       c, out);
+  return done_line(x->b, groups, in, c, out);
 }

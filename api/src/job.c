@@ -55,29 +55,35 @@ static const struct {
 
 /*
  * The endpoints that cut their jobs: one row each, the endpoint's name in
- * API_ENDPOINTS, its cut and run (job.h), and the media type of its answer.
- * An endpoint that is not here answers in one chunk, application/json.
+ * API_ENDPOINTS, its cut and run (job.h), the media type of its answer,
+ * and its open (job.h) or NULL.  An endpoint that is not here answers in
+ * one chunk, application/json.
  */
-#define API_JOB_CUTS(X)
+#define API_JOB_CUTS(X)                                                        \
+  X(BATCH, ep_batch_job_cut, ep_batch_job_run, "application/x-ndjson",         \
+    ep_batch_job_open)
 
-#define JOB_CUT_DECLARE(name, cut, run, media)                                 \
+#define JOB_CUT_DECLARE(name, cut, run, media, open)                           \
   ep_job_cut_fn cut;                                                           \
   ep_job_run_fn run;
 API_JOB_CUTS(JOB_CUT_DECLARE)
 #undef JOB_CUT_DECLARE
+ep_job_open_fn ep_batch_job_open;
 
 typedef struct job_row {
   size_t ep;
   ep_job_cut_fn *cut;
   ep_job_run_fn *run;
   const char *media;
+  ep_job_open_fn *open;
 } job_row;
 
 static const job_row CUTS[] = {
-#define JOB_CUT_ROW(name, cut, run, media) {JOB_EP_##name, cut, run, media},
+#define JOB_CUT_ROW(name, cut, run, media, open)                               \
+  {JOB_EP_##name, cut, run, media, open},
     API_JOB_CUTS(JOB_CUT_ROW)
 #undef JOB_CUT_ROW
-        {JOB_EP_COUNT, NULL, NULL, NULL} /* the end */
+        {JOB_EP_COUNT, NULL, NULL, NULL, NULL} /* the end */
 };
 
 struct api_job {
@@ -170,15 +176,18 @@ int api_job_open(size_t index, const char *body, size_t len,
               index);
     goto done;
   }
-  if (!(root = api__parse(body ? body : "", len, lim, &e)))
-    goto done;
   if (!(j = calloc(1, sizeof *j))) {
     api__fail(&e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
     goto done;
   }
   j->ep = index;
   j->row = row_of(index);
-  if (CODEC[index].decode(root, &c, &j->x) != 0)
+  int opened =
+      j->row && j->row->open && body ? j->row->open(body, len, &c, &j->x) : 0;
+  if (opened < 0)
+    goto done;
+  if (!opened && (!(root = api__parse(body ? body : "", len, lim, &e)) ||
+                  CODEC[index].decode(root, &c, &j->x) != 0))
     goto done;
   if (!j->row) { /* its chunk decodes its own copy */
     CODEC[index].release(j->x);

@@ -32,6 +32,12 @@ typedef struct api_job_cut {
 int api__job_cut_alloc(api_job_cut *cut, size_t n, const api_call *c);
 
 typedef int ep_job_cut_fn(const void *x, const api_call *c, api_job_cut *cut);
+/* Optional: decode a job's body into x without jansson's tree of the whole
+ * body (a large body of the usual shape): 1 and *x; 0 when it leaves the
+ * body to the whole parse and decode (nothing recorded); -1 with the
+ * problem in c->e. */
+typedef int ep_job_open_fn(const char *body, size_t len, const api_call *c,
+                           void **x);
 typedef int ep_job_run_fn(const void *x, size_t k, const api_job_inputs *in,
                           const api_call *c, api_response *out);
 

@@ -204,15 +204,20 @@ static void w_value(api_wbuf *b, const json_t *j, const api_lazies *lz,
 }
 
 char *api__dump(const json_t *j, size_t *len) {
-  api_wbuf b = {NULL, 0, 0, 0};
-  w_grow(&b, 1024);
+  /* small texts are common (a batch item's id and body): the buffer starts
+   * small and doubles */
+  api_wbuf b = {malloc(256), 0, 256, 0};
+  b.oom = !b.p;
   w_value(&b, j, NULL, NULL);
   if (b.oom) {
     free(b.p);
     return NULL;
   }
+  /* a text kept for long (a batch item's body) keeps its length, not the
+   * buffer's 4 KiB or more */
+  char *fit = b.cap > b.len + 1 ? realloc(b.p, b.len + 1) : NULL;
   *len = b.len;
-  return b.p;
+  return fit ? fit : b.p;
 }
 
 /* ---- streams --------------------------------------------------------------
