@@ -23,8 +23,8 @@
 
 #define ASYNC "Prefer: handling=lenient, RESPOND-ASYNC; wait=5\r\n"
 #define ORBIT "{" PAPER ",\"kind\":\"overshoot\"}"
-/* a /simulate of about a tenth of a second */
-#define SLOW "{" PAPER ",\"initial\":" X0 ",\"t_end\":2e6,\"events\":false}"
+/* a /simulate of a few hundredths of a second */
+#define SLOW "{" PAPER ",\"initial\":" X0 ",\"t_end\":4e5,\"events\":false}"
 /* ... and one of more than half a second */
 #define SECONDS_SIM                                                            \
   "{" PAPER ",\"initial\":" X0 ",\"t_end\":9e6,\"events\":false}"
@@ -511,7 +511,7 @@ int main(int argc, char **argv) {
   const char *args[] = {"--job-store", store, "--quiet", NULL};
   ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
   PORT = d.port;
-  const int items = 24;
+  const int items = 128; /* four chunks of 32 and the done line */
   char *batch = batch_of(items, "/simulate", SLOW);
   char *sync = sync_answer(d.port, "/batch", batch);
   int n;
