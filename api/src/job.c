@@ -58,7 +58,8 @@ static const struct {
  * API_ENDPOINTS, its cut and run (job.h), and the media type of its answer.
  * An endpoint that is not here answers in one chunk, application/json.
  */
-#define API_JOB_CUTS(X)
+#define API_JOB_CUTS(X)                                                        \
+  X(MAP, ep_map_job_cut, ep_map_job_run, "application/x-ndjson")
 
 #define JOB_CUT_DECLARE(name, cut, run, media)                                 \
   ep_job_cut_fn cut;                                                           \

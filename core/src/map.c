@@ -191,8 +191,10 @@ static void to_map_orbit(const ss_orbit *o, int from_cell, ss_map_orbit *a) {
   memset(a, 0, sizeof *a);
   a->kind = o->kind;
   a->n_phases = o->n_phases;
-  memcpy(a->modes, o->modes, sizeof a->modes);
-  memcpy(a->durations, o->durations, sizeof a->durations);
+  /* the phases alone: what follows them stays zero */
+  memcpy(a->modes, o->modes, (size_t)o->n_phases * sizeof a->modes[0]);
+  memcpy(a->durations, o->durations,
+         (size_t)o->n_phases * sizeof a->durations[0]);
   a->period = o->period;
   a->n_turns = o->n_turns;
   memcpy(a->z0, o->z0, sizeof a->z0);
