@@ -173,6 +173,10 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
    * strict mode: 0.9.75 answers a request without Host
    * there with its own page, whose header block it writes twice; request.c
    * refuses that, and a space in the target (srv__target), itself */
+  /* jobs before the first request: a Prefer: respond-async that came
+   * before them would be answered synchronously */
+  if (!cfg->no_jobs)
+    d->jobs = srv__jobs_start(d);
   d->mhd = MHD_start_daemon(
       flags, (uint16_t)cfg->port, srv__accept, d, srv__handler, d,
       MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss, MHD_OPTION_CONNECTION_LIMIT,
@@ -195,10 +199,10 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
             port);
   else
     fprintf(stderr, "stickslipd listening on http://%s:%d\n", cfg->bind, port);
-  /* after the line that tells the URL, which a supervisor reads first; no
-   * client knows the URL before it */
-  if (!cfg->no_jobs && !(d->jobs = srv__jobs_start(d)))
+  /* after the line that tells the URL, which a supervisor reads first */
+  if (!cfg->no_jobs && !d->jobs)
     fprintf(stderr, "stickslipd: out of memory for jobs: none are kept\n");
+  srv__jobs_announce(d->jobs);
   fflush(stderr);
   return d;
 }

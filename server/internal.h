@@ -260,9 +260,13 @@ double srv__wall(void);
     srv_metrics_store((d)->metrics, srv__now() - t0_);                         \
   } while (0)
 
-/* Open the store (a failure is logged: jobs are then answered 503 until it
- * opens) and start the runners and the ticker.  NULL when out of memory. */
+/* Open the store (a failure is noted for srv__jobs_announce: jobs are
+ * then answered 503 until it opens) and start the runners and the ticker.  NULL
+ * when out of memory. */
 srv__jobs *srv__jobs_start(struct srv_daemon *d);
+/* Log what opening the store at the start had to say (after the line
+ * that tells the daemon's URL, which a supervisor reads first). */
+void srv__jobs_announce(srv__jobs *js);
 /* The runners stop: a chunk computing is cancelled and not stored (its
  * lease lapses), the others are left to the store. */
 void srv__jobs_stop(srv__jobs *js);

@@ -86,6 +86,7 @@ struct srv__jobs {
   srv__results **waiting; /* results streams to resume */
   size_t n_waiting, cap_waiting;
   double counts_at;
+  char note[1024]; /* what opening the store at the start had to say */
 };
 
 double srv__wall(void) {
@@ -111,27 +112,38 @@ static void make_parent(const char *uri) {
     fprintf(stderr, "stickslipd: cannot make %s: %s\n", dir, strerror(errno));
 }
 
-/* Open the store (under js->mu). */
-static void open_store(srv__jobs *js) {
-  char why[256] = "";
+/* Open the store (under js->mu, or before any thread shares js); what it
+ * has to say goes to the log, or into js->note when @a later. */
+static void open_store(srv__jobs *js, int later) {
+  char why[256] = "", note[sizeof js->note];
   make_parent(js->d->cfg.job_store);
   if (store_open(js->d->cfg.job_store, &js->st, why, sizeof why) != 0) {
     js->st = NULL;
     js->reopen_at = srv__now() + REOPEN_EVERY;
-    fprintf(stderr,
-            "stickslipd: the job store %s cannot be opened (%s): jobs are "
-            "answered 503 until it can; synchronous requests are served\n",
-            js->d->cfg.job_store, why);
-    return;
+    snprintf(
+        note, sizeof note,
+        "stickslipd: the job store %.512s cannot be opened (%.256s): jobs are "
+        "answered 503 until it can; synchronous requests are served\n",
+        js->d->cfg.job_store, why);
+  } else {
+    snprintf(note, sizeof note, "stickslipd: job store %.512s (%s)\n",
+             js->d->cfg.job_store, store_kind(js->st));
   }
-  fprintf(stderr, "stickslipd: job store %s (%s)\n", js->d->cfg.job_store,
-          store_kind(js->st));
+  if (later)
+    memcpy(js->note, note, sizeof note);
+  else
+    fputs(note, stderr);
+}
+
+void srv__jobs_announce(srv__jobs *js) {
+  if (js && js->note[0])
+    fputs(js->note, stderr);
 }
 
 store *srv__jobs_store(srv__jobs *js) {
   pthread_mutex_lock(&js->mu);
   if (!js->st && js->d->cfg.job_store[0] && srv__now() >= js->reopen_at)
-    open_store(js);
+    open_store(js, 0);
   store *st = js->st;
   pthread_mutex_unlock(&js->mu);
   return st;
@@ -543,7 +555,7 @@ srv__jobs *srv__jobs_start(struct srv_daemon *d) {
   snprintf(js->owner, sizeof js->owner, "%s:%ld:%.0f", host, (long)getpid(),
            srv__wall());
   if (d->cfg.job_store[0])
-    open_store(js);
+    open_store(js, 1);
   js->n_run = d->cfg.job_workers;
   if (js->n_run && !(js->run = calloc(js->n_run, sizeof *js->run))) {
     srv__jobs_free(js);
