@@ -118,6 +118,13 @@ static int end(pgs *p, int rc) {
   return rc;
 }
 
+/* Notices ("relation already exists, skipping") are not errors, and the
+ * daemon's standard error is its log: libpq's are dropped. */
+static void quiet(void *cls, const char *message) {
+  (void)cls;
+  (void)message;
+}
+
 int store__pg_open(const char *uri, void **b, char *why, size_t n) {
   *b = NULL;
   pgs *p = calloc(1, sizeof *p);
@@ -127,6 +134,7 @@ int store__pg_open(const char *uri, void **b, char *why, size_t n) {
   }
   p->db = PQconnectdb(uri);
   pthread_mutex_init(&p->lock, NULL);
+  PQsetNoticeProcessor(p->db, quiet, NULL);
   int rc = 0;
   if (PQstatus(p->db) != CONNECTION_OK) {
     rc = fail_pg(p, "connect");
