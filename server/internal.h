@@ -264,6 +264,9 @@ double srv__wall(void);
  * then answered 503 until it opens) and start the runners and the ticker.  NULL
  * when out of memory. */
 srv__jobs *srv__jobs_start(struct srv_daemon *d);
+/* The limits a job is opened and its chunks run under: the daemon's, with
+ * --max-job-body and --max-job-items for the body and a /batch's items. */
+api_limits srv__job_limits(const struct srv_daemon *d);
 /* Log what opening the store at the start had to say (after the line
  * that tells the daemon's URL, which a supervisor reads first). */
 void srv__jobs_announce(srv__jobs *js);

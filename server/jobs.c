@@ -89,6 +89,13 @@ struct srv__jobs {
   char note[1024]; /* what opening the store at the start had to say */
 };
 
+api_limits srv__job_limits(const struct srv_daemon *d) {
+  api_limits lim = d->cfg.lim;
+  lim.max_body = d->cfg.max_job_body;
+  lim.max_batch_items = d->cfg.max_job_items;
+  return lim;
+}
+
 double srv__wall(void) {
   struct timespec ts;
   clock_gettime(CLOCK_REALTIME, &ts);
@@ -214,8 +221,7 @@ api_job *srv__jobs_open(srv__jobs *js, const char *id, const char *path,
   if (rc == STORE_NONE)
     return NULL;
   api_job *job = NULL;
-  api_limits lim = js->d->cfg.lim;
-  lim.max_body = js->d->cfg.max_job_body;
+  api_limits lim = srv__job_limits(js->d);
   if (api_route("POST", path, &ep) != 200)
     api_problem(out, API_P_NOT_FOUND, "the job's endpoint is not served here",
                 NULL, NULL, 0);
@@ -354,9 +360,8 @@ static void fail_job(srv__jobs *js, store *st, const char *id,
 /* The limits of chunk @a k of a job that started at @a started: the
  * job's time limit less what it has used. */
 static api_limits chunk_limits(const srv__jobs *js, double started) {
-  api_limits lim = js->d->cfg.lim;
+  api_limits lim = srv__job_limits(js->d);
   double used = started > 0 ? srv__wall() - started : 0;
-  lim.max_body = js->d->cfg.max_job_body;
   lim.max_seconds = js->d->cfg.job_max_seconds - (used > 0 ? used : 0);
   return lim;
 }

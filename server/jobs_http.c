@@ -283,13 +283,12 @@ enum MHD_Result srv__jobs_answer(struct srv_daemon *d, struct MHD_Connection *c,
  * its status document into r->ar. */
 static void submit_job(srv__req *r, store *st) {
   struct srv_daemon *d = r->d;
-  api_limits lim = d->cfg.lim;
+  api_limits lim = srv__job_limits(d);
   api_job *job = NULL;
   store_chunk *chunks = NULL;
   unsigned char bytes[STORE_ID_LEN / 2];
   store_job sj;
   memset(&sj, 0, sizeof sj);
-  lim.max_body = d->cfg.max_job_body;
   if (api_job_open(r->ep, r->buf ? r->buf : "", r->len, &lim, &job, &r->ar))
     return; /* its problem, as the synchronous request would be answered */
   size_t n = api_job_chunks(job);

@@ -97,6 +97,9 @@ static const flag FLAGS[] = {
     {"--max-job-body", F_SIZE, 64, 1e12, CFG(max_job_body),
      "request body limit of a job (Prefer: respond-async), bytes; it is "
      "held against --memory-budget while it comes"},
+    {"--max-job-items", F_SIZE, 1, 1e9, CFG(max_job_items),
+     "requests in one /batch job (a synchronous /batch takes "
+     "--max-batch-items)"},
 };
 #define N_FLAGS (sizeof FLAGS / sizeof FLAGS[0])
 
@@ -225,6 +228,7 @@ static void defaults(srv_config *cfg) {
   cfg->job_ttl = 7 * 86400;
   cfg->job_lease = 30;
   cfg->max_job_body = (size_t)256 << 20;
+  cfg->max_job_items = 1000000;
 }
 
 /* The environment variable of option @a name ("--max-seconds" ->

@@ -53,6 +53,7 @@ typedef struct srv_config {
   double job_lease;       /**< --job-lease: seconds a claim of a chunk
                                holds unless renewed (30) */
   size_t max_job_body;    /**< --max-job-body: a job's request body */
+  size_t max_job_items;   /**< --max-job-items: items of a /batch job */
 } srv_config;
 
 /* ---- the compute pool (pool.c) ----------------------------------------- */

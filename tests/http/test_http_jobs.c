@@ -501,6 +501,36 @@ static void test_unavailable(const char *deleted) {
   unlink(d.log_path);
 }
 
+/* EVIDENCE: README "Jobs": a /batch job takes up to --max-job-items items,
+ * past the synchronous --max-batch-items; more are refused at submission
+ * with the limit's name. */
+static void test_job_items(void) {
+  daemon_proc d;
+  char store[128];
+  http_resp r;
+  snprintf(store, sizeof store, "sqlite:%s/items.sqlite", TMP);
+  const char *args[] = {"--job-store",     store, "--max-batch-items", "4",
+                        "--max-job-items", "6",   "--quiet",           NULL};
+  ASSERT_EQ_INT(daemon_start(BIN, args, &d), 0);
+  char *six = batch_of(6, "/orbit", ORBIT),
+       *seven = batch_of(7, "/orbit", ORBIT);
+  ASSERT_EQ_INT(req(d.port, "POST", "/batch", "", six, &r), 0);
+  ASSERT_EQ_INT(r.status, 422); /* synchronous: over --max-batch-items */
+  http_free(&r);
+  ASSERT_EQ_INT(req(d.port, "POST", "/batch", ASYNC, six, &r), 0);
+  ASSERT_EQ_INT(r.status, 201);
+  http_free(&r);
+  ASSERT_EQ_INT(req(d.port, "POST", "/batch", ASYNC, seven, &r), 0);
+  ASSERT_EQ_INT(r.status, 422);
+  ASSERT_TRUE(strstr(r.body, "max_batch_items") != NULL ||
+              strstr(r.body, "max_job_items") != NULL);
+  http_free(&r);
+  free(six);
+  free(seven);
+  ASSERT_EQ_INT(daemon_stop(&d), 0);
+  unlink(d.log_path);
+}
+
 int main(int argc, char **argv) {
   int rc = fixture_init(argc, argv);
   if (rc)
@@ -525,6 +555,7 @@ int main(int argc, char **argv) {
   test_ids(d.port);
   fixture_daemon_stop(&d);
   test_failed();
+  test_job_items();
   test_kill(batch, items, want);
   snprintf(store, sizeof store, "sqlite:%s/deleted.sqlite", TMP);
   test_unavailable(store);
