@@ -3,6 +3,7 @@
  * basin of each over a two-dimensional slice of initial states
  * (ss_basins_run); the labels as a base64 byte array, row-major.
  */
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,8 +12,10 @@
 #include "endpoints.h"
 #include "decode.h"
 #include "encode.h"
+#include "job.h"
 #include "problem.h"
 #include "values.h"
+#include "writer.h"
 
 static const char *const VARIABLES[] = {"x1", "x2", "v1", "v2", NULL};
 
@@ -148,6 +151,19 @@ static const api_field FIELDS[] = {
 };
 static const api_spec SPEC = API_SPEC(FIELDS);
 
+/* What the call gives a computation over @a rows rows: its threads, its
+ * time budget and its cancel hook. */
+static void call_opts(const api_call *c, long long rows, ss_basin_opts *o) {
+  o->threads = api__threads(c, rows);
+  o->max_seconds = c->lim->max_seconds;
+  o->cancelled = NULL;
+  o->cancel_cls = NULL;
+  if (c->srv && c->srv->cancelled) {
+    o->cancelled = c->srv->cancelled;
+    o->cancel_cls = c->srv->cancel_cls;
+  }
+}
+
 int ep_basins_decode(const json_t *root, const api_call *c, void **xp) {
   basins_x *x = api__alloc(sizeof *x, xp, c);
   if (!x)
@@ -191,12 +207,19 @@ int ep_basins_decode(const json_t *root, const api_call *c, void **xp) {
     o->state[i] = x->state.v[i] * unit[i];
   o->max_period = (int)x->max_period;
   o->max_returns = (int)x->max_returns;
-  o->threads = api__threads(c, x->axes.a[0].n);
-  o->max_seconds = c->lim->max_seconds;
-  if (c->srv && c->srv->cancelled) {
-    o->cancelled = c->srv->cancelled;
-    o->cancel_cls = c->srv->cancel_cls;
-  }
+  call_opts(c, x->axes.a[0].n, o);
+  return 0;
+}
+
+/* The problem of a core status @a rc that is not SS_OK; 0 for SS_OK. */
+static int basins_problem(int rc, const ss_diag *d, const api_call *c) {
+  if (rc == SS_ELIMIT_TIME)
+    return api__status_limit(c->e, rc, "max_seconds", c->lim->max_seconds, "",
+                             "the basins needed more than %g s; make the "
+                             "slice smaller or coarser, or lower max_returns",
+                             c->lim->max_seconds);
+  if (rc)
+    return api__from_diag(c->e, rc, d, "");
   return 0;
 }
 
@@ -204,15 +227,7 @@ int ep_basins_run(void *xp, const api_call *c) {
   basins_x *x = xp;
   ss_diag d;
   ss_diag_clear(&d);
-  int rc = ss_basins_run(&x->m, &x->opts, &x->b, &d);
-  if (rc == SS_ELIMIT_TIME)
-    return api__status_limit(c->e, rc, "max_seconds", c->lim->max_seconds, "",
-                             "the basins needed more than %g s; make the "
-                             "slice smaller or coarser, or lower max_returns",
-                             c->lim->max_seconds);
-  if (rc)
-    return api__from_diag(c->e, rc, &d, "");
-  return 0;
+  return basins_problem(ss_basins_run(&x->m, &x->opts, &x->b, &d), &d, c);
 }
 
 /* RFC 4648 base64 of @a n bytes; malloc'd, NUL-terminated. */
@@ -315,4 +330,311 @@ void ep_basins_release(void *xp) {
     return;
   ss_basins_free(&x->b);
   free(x);
+}
+
+/* ---- the endpoint as a job -----------------------------------------------
+ *
+ * A /basins job is cut where the core stages its map (stickslip.h, the
+ * stages of ss_basins_run):
+ *   stage 0  one chunk, not visible: the attractors (ss_basins_attractors);
+ *   stage 1  the rows in groups of about BASINS_JOB_CELLS cells (at least
+ *            a row), not visible: each the labels of its rows against stage
+ *            0's attractors (ss_basins_rows), its returns and the most
+ *            returns one of its cells took to land;
+ *   stage 2  one visible chunk: the map gathered from them, finished
+ *            (ss_basins_finish) and written as the synchronous answer.
+ * Items are cells, counted by the chunks of stage 1.
+ *
+ * The attractors go from stage 0 to the others as the core holds them:
+ * their bytes, in base64, under the library's version and the size of
+ * one, so that every double reads back bit for bit and the map is the
+ * synchronous one by the core's promise; a replica of another build
+ * refuses them rather than misread them.
+ *
+ * Why 8192 cells: 16 rows of the paper's 512x512 slice took 0.19-0.36 s on
+ * one thread of a loaded machine (cells far from every attractor cost more,
+ * up to max_returns returns each), a fraction of a second, so that the
+ * store's cost per chunk (a claim, a lease, a result written) is small
+ * beside it and a chunk lost with its replica costs little to do again.
+ */
+enum { BASINS_JOB_CELLS = 8192 };
+
+ep_job_cut_fn ep_basins_job_cut;
+ep_job_run_fn ep_basins_job_run;
+
+static long long rows_per_chunk(const basins_x *x) {
+  long long per = BASINS_JOB_CELLS / x->axes.a[1].n;
+  return per > 1 ? per : 1;
+}
+
+static size_t groups_of(const basins_x *x) {
+  long long per = rows_per_chunk(x);
+  return (size_t)((x->axes.a[0].n + per - 1) / per);
+}
+
+int ep_basins_job_cut(const void *xp, const api_call *c, api_job_cut *cut) {
+  const basins_x *x = xp;
+  size_t groups = groups_of(x);
+  long long per = rows_per_chunk(x), n0 = x->axes.a[0].n;
+  if (api__job_cut_alloc(cut, groups + 2, c) != 0)
+    return -1;
+  for (size_t g = 0; g < groups; g++) {
+    long long row = (long long)g * per;
+    cut->stage[g + 1] = 1;
+    cut->items[g + 1] =
+        (long)((row + per <= n0 ? per : n0 - row) * x->axes.a[1].n);
+  }
+  cut->stage[groups + 1] = 2;
+  cut->visible[groups + 1] = 1;
+  return 0;
+}
+
+/* RFC 4648 base64 @a s (@a n characters) into exactly @a want bytes at
+ * @a out: 0, or -1 when it is not that. */
+static int unbase64(const char *s, size_t n, unsigned char *out, size_t want) {
+  size_t w = 0;
+  if (n != 4 * ((want + 2) / 3))
+    return -1;
+  for (size_t i = 0; i < n; i += 4) {
+    unsigned v = 0;
+    int pad = 0;
+    for (int q = 0; q < 4; q++) {
+      char ch = s[i + (size_t)q];
+      int d = ch >= 'A' && ch <= 'Z'   ? ch - 'A'
+              : ch >= 'a' && ch <= 'z' ? ch - 'a' + 26
+              : ch >= '0' && ch <= '9' ? ch - '0' + 52
+              : ch == '+'              ? 62
+              : ch == '/'              ? 63
+                                       : -1;
+      if (ch == '=' && i + 4 == n && q >= 2) {
+        pad++;
+        d = 0;
+      } else if (d < 0 || pad) {
+        return -1;
+      }
+      v = v << 6 | (unsigned)d;
+    }
+    for (int q = 0; q < 3 - pad; q++) {
+      if (w == want)
+        return -1;
+      out[w++] = (unsigned char)(v >> (16 - 8 * q));
+    }
+  }
+  return w == want ? 0 : -1;
+}
+
+/* The integer @a key of @a o within [@a lo, @a hi] into *v: 1, or 0. */
+static int int_of(const json_t *o, const char *key, long long lo, long long hi,
+                  long long *v) {
+  const json_t *j = json_object_get(o, key);
+  if (!json_is_integer(j))
+    return 0;
+  *v = json_integer_value(j);
+  return *v >= lo && *v <= hi;
+}
+
+/* The bytes @a key of @a o (base64), exactly @a want of them, into @a out:
+ * 1, or 0. */
+static int bytes_of(const json_t *o, const char *key, unsigned char *out,
+                    size_t want) {
+  const json_t *j = json_object_get(o, key);
+  return json_is_string(j) &&
+         unbase64(json_string_value(j), json_string_length(j), out, want) == 0;
+}
+
+/* Chunk @a k's stored document, parsed, into *doc: 0, or -1 and the
+ * problem. */
+static int read_doc(const api_job_inputs *in, size_t k, const api_call *c,
+                    json_t **doc) {
+  char *buf = NULL;
+  size_t len = 0;
+  *doc = NULL;
+  if (!in || !in->read || in->read(in->cls, k, &buf, &len) != 0)
+    return api__fail(c->e, API_P_STORE_UNAVAILABLE, NULL,
+                     "the result of chunk %zu could not be read from the job "
+                     "store",
+                     k);
+  *doc = json_loadb(buf, len, 0, NULL);
+  free(buf);
+  return *doc ? 0
+              : api__fail(c->e, API_P_INTERNAL, NULL,
+                          "the stored result of chunk %zu is not JSON", k);
+}
+
+/* A 200 result, the compact text of @a doc (consumed). */
+static int result_of(json_t *doc, const api_call *c, api_response *out) {
+  size_t len = 0;
+  char *text = doc ? api__dump(doc, &len) : NULL;
+  json_decref(doc);
+  if (!text)
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL,
+                     "the chunk's result could not be written: out of memory");
+  out->status = 200;
+  out->content_type = "application/json";
+  out->body = text;
+  out->len = len;
+  out->held = len;
+  return 0;
+}
+
+/* @a n bytes as a new JSON string of their base64; NULL when out of
+ * memory. */
+static json_t *base64_json(const void *p, size_t n) {
+  char *text = base64(p, n);
+  json_t *j = text ? json_string(text) : NULL;
+  free(text);
+  return j;
+}
+
+/* Stage 0: {"version", "size", "n", "attractors": base64 of their bytes}. */
+static int run_attractors(const basins_x *x, const api_call *c,
+                          api_response *out) {
+  ss_basin_opts o = x->opts;
+  ss_basins b;
+  ss_diag d;
+  ss_diag_clear(&d);
+  call_opts(c, 1, &o);
+  int rc = ss_basins_alloc(&o, &b, &d);
+  if (rc == SS_OK)
+    rc = ss_basins_attractors(&x->m, &o, &b, &d);
+  if (rc) {
+    ss_basins_free(&b);
+    return basins_problem(rc, &d, c);
+  }
+  json_t *doc = json_object();
+  if (doc && (api__set(doc, "version", json_string(SS_VERSION)) ||
+              api__set(doc, "size", json_integer(sizeof *b.attractors)) ||
+              api__set(doc, "n", json_integer(b.n_attractors)) ||
+              api__set(doc, "attractors",
+                       base64_json(b.attractors, (size_t)b.n_attractors *
+                                                     sizeof *b.attractors)))) {
+    json_decref(doc);
+    doc = NULL;
+  }
+  ss_basins_free(&b);
+  return result_of(doc, c, out);
+}
+
+/* The map of @a o with stage 0's attractors read back: 0, or -1 and the
+ * problem (@a b then to be freed all the same). */
+static int read_attractors(const ss_basin_opts *o, const api_job_inputs *in,
+                           const api_call *c, ss_basins *b) {
+  ss_diag d;
+  ss_diag_clear(&d);
+  json_t *doc = NULL;
+  int rc = ss_basins_alloc(o, b, &d);
+  if (rc)
+    return basins_problem(rc, &d, c);
+  if (read_doc(in, 0, c, &doc))
+    return -1;
+  const json_t *v = json_object_get(doc, "version");
+  long long size = 0, n = 0;
+  int ok = json_is_string(v) && !strcmp(json_string_value(v), SS_VERSION) &&
+           int_of(doc, "size", 0, LLONG_MAX, &size) &&
+           size == (long long)sizeof *b->attractors &&
+           int_of(doc, "n", 0, SS_BASIN_MAX_ATTRACTORS, &n) &&
+           bytes_of(doc, "attractors", (unsigned char *)b->attractors,
+                    (size_t)n * sizeof *b->attractors);
+  json_decref(doc);
+  if (!ok)
+    return api__fail(c->e, API_P_INTERNAL, NULL,
+                     "the stored attractors are not those of this build (%s, "
+                     "%zu bytes each)",
+                     SS_VERSION, sizeof *b->attractors);
+  b->n_attractors = (int)n;
+  return 0;
+}
+
+/* Stage 1, group @a g: {"row", "rows", "returns", "max_to_land",
+ * "labels": base64 of the rows' labels}. */
+static int run_rows(const basins_x *x, size_t g, const api_job_inputs *in,
+                    const api_call *c, api_response *out) {
+  long long per = rows_per_chunk(x), n0 = x->axes.a[0].n;
+  long long row = (long long)g * per, rows = row + per <= n0 ? per : n0 - row;
+  size_t width = (size_t)x->axes.a[1].n;
+  ss_basin_opts o = x->opts;
+  ss_basins b;
+  ss_diag d;
+  ss_diag_clear(&d);
+  call_opts(c, rows, &o);
+  int rc = read_attractors(&o, in, c, &b);
+  if (rc == 0) {
+    rc = ss_basins_rows(&x->m, &o, &b, (int)row, (int)rows, &d);
+    rc = basins_problem(rc, &d, c);
+  }
+  if (rc) {
+    ss_basins_free(&b);
+    return -1;
+  }
+  json_t *doc = json_object();
+  if (doc && (api__set(doc, "row", json_integer(row)) ||
+              api__set(doc, "rows", json_integer(rows)) ||
+              api__set(doc, "returns", json_integer(b.returns)) ||
+              api__set(doc, "max_to_land", json_integer(b.max_returns)) ||
+              api__set(doc, "labels",
+                       base64_json(b.labels + (size_t)row * width,
+                                   (size_t)rows * width)))) {
+    json_decref(doc);
+    doc = NULL;
+  }
+  ss_basins_free(&b);
+  return result_of(doc, c, out);
+}
+
+/* Stage 2: the map gathered from the groups of stage 1, finished, and
+ * written as the synchronous answer. */
+static int run_last(const basins_x *x, const api_job_inputs *in,
+                    const api_call *c, api_response *out) {
+  long long per = rows_per_chunk(x), n0 = x->axes.a[0].n;
+  size_t groups = groups_of(x), width = (size_t)x->axes.a[1].n;
+  basins_x *y = malloc(sizeof *y);
+  ss_diag d;
+  ss_diag_clear(&d);
+  if (!y)
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  *y = *x; /* its own map and options: x is shared by the chunks */
+  call_opts(c, n0, &y->opts);
+  int rc = read_attractors(&y->opts, in, c, &y->b);
+  for (size_t g = 0; rc == 0 && g < groups; g++) {
+    long long row = (long long)g * per, rows = row + per <= n0 ? per : n0 - row;
+    long long r0 = -1, r1 = -1, returns = 0, most = 0;
+    json_t *doc = NULL;
+    if ((rc = read_doc(in, g + 1, c, &doc)))
+      break;
+    int ok = int_of(doc, "row", 0, n0, &r0) && r0 == row &&
+             int_of(doc, "rows", 0, n0, &r1) && r1 == rows &&
+             int_of(doc, "returns", 0, LLONG_MAX, &returns) &&
+             int_of(doc, "max_to_land", 0, INT_MAX, &most) &&
+             bytes_of(doc, "labels", y->b.labels + (size_t)row * width,
+                      (size_t)rows * width);
+    json_decref(doc);
+    if (!ok) {
+      rc = api__fail(c->e, API_P_INTERNAL, NULL,
+                     "the stored result of chunk %zu is not the labels of "
+                     "rows %lld to %lld",
+                     g + 1, row, row + rows - 1);
+      break;
+    }
+    y->b.returns += (long)returns;
+    if (most > y->b.max_returns)
+      y->b.max_returns = (int)most;
+  }
+  if (rc == 0)
+    rc = basins_problem(ss_basins_finish(&y->m, &y->opts, &y->b, &d), &d, c);
+  if (rc == 0)
+    rc = ep_basins_encode(y, c, out);
+  ss_basins_free(&y->b);
+  free(y);
+  return rc;
+}
+
+int ep_basins_job_run(const void *xp, size_t k, const api_job_inputs *in,
+                      const api_call *c, api_response *out) {
+  const basins_x *x = xp;
+  size_t groups = groups_of(x);
+  if (k == 0)
+    return run_attractors(x, c, out);
+  if (k <= groups)
+    return run_rows(x, k - 1, in, c, out);
+  return run_last(x, in, c, out);
 }

@@ -1504,7 +1504,8 @@ typedef struct ss_basins {
  * attractor within max_returns are simulated on (ss_attractor_from()); a
  * periodic attractor they settle on is added (from_simulation) when it solves
  * as a feasible stable orbit, and those cells are tried again; the rest stay
- * unresolved.
+ * unresolved.  The composition of ss_basins_alloc(), ss_basins_attractors(),
+ * ss_basins_rows() over every row and ss_basins_finish(), under one budget.
  * @return SS_OK; SS_EINVAL (bad options); SS_ELIMIT_TIME, SS_ECANCELED
  *         (labels not reached are SS_BASIN_UNRESOLVED); SS_ENOMEM.
  *         Release @a b with ss_basins_free() whatever happens.
@@ -1512,8 +1513,57 @@ typedef struct ss_basins {
 SS_API int ss_basins_run(const ss_model *m, const ss_basin_opts *opts,
                          ss_basins *b, ss_diag *d);
 
-/** Release what ss_basins_run() allocated.  NULL-safe; zeroes @a b. */
+/** Release what ss_basins_run() or ss_basins_alloc() allocated.  NULL-safe;
+ *  zeroes @a b. */
 SS_API void ss_basins_free(ss_basins *b);
+
+/*
+ * The stages of ss_basins_run(), which is their composition, for a basin
+ * map computed in pieces (rows in any order, in other processes):
+ *   ss_basins_alloc()       the map of the slice: every label unresolved;
+ *   ss_basins_attractors()  stage 0: the attractors of the orbit search;
+ *   ss_basins_rows()        stage 1: any rows, labelled against the
+ *                           attractors b holds (cells that land on none
+ *                           stay SS_BASIN_UNRESOLVED);
+ *   ss_basins_finish()      stage 2: attractors from simulation over the
+ *                           cells still unresolved, those cells run again
+ *                           after each, and the counts.
+ * A row's labels depend on its cells and the attractors alone, so a map
+ * whose attractors are copied from stage 0's (every byte of them, n and
+ * order) and whose rows are done by separate calls on separate maps, their
+ * labels, returns (summed) and max_returns (the largest) gathered into one,
+ * is after stage 2 the map ss_basins_run() gives, bit for bit.  Each call
+ * has its own time budget (opts->max_seconds from its start); @a opts is
+ * the same slice throughout.
+ */
+
+/** A map of the slice of @a opts (checked as ss_basins_run() checks it):
+ *  no attractors, every label SS_BASIN_UNRESOLVED, no returns.  SS_OK;
+ *  SS_EINVAL; SS_ENOMEM.  Release it with ss_basins_free(). */
+SS_API int ss_basins_alloc(const ss_basin_opts *opts, ss_basins *b, ss_diag *d);
+
+/** Stage 0: the stable orbits of ss_orbit_find() that pass the contraction
+ *  check, in its order, as @a b's attractors (those it held are replaced).
+ *  SS_OK; SS_EINVAL (options, or @a b not of this slice); SS_ELIMIT_TIME,
+ *  SS_ECANCELED (the attractors found so far); the search's failure. */
+SS_API int ss_basins_attractors(const ss_model *m, const ss_basin_opts *opts,
+                                ss_basins *b, ss_diag *d);
+
+/** Stage 1: the cells of rows @a row to @a row + @a rows - 1 of @a b (along
+ *  vary[0]) labelled against @a b's attractors, on opts->threads threads;
+ *  their returns added to b->returns, b->max_returns raised to theirs.
+ *  SS_OK; SS_EINVAL; SS_ELIMIT_TIME, SS_ECANCELED (cells not reached stay
+ *  as they were). */
+SS_API int ss_basins_rows(const ss_model *m, const ss_basin_opts *opts,
+                          ss_basins *b, int row, int rows, ss_diag *d);
+
+/** Stage 2: the unresolved cells of @a b simulated on, in row-major order,
+ *  for attractors to add (from_simulation); after each, the unresolved
+ *  cells labelled again; then b->unresolved, b->perpetual and each
+ *  attractor's cells counted.  SS_OK; SS_EINVAL; SS_ELIMIT_TIME,
+ *  SS_ECANCELED (the counts are still made). */
+SS_API int ss_basins_finish(const ss_model *m, const ss_basin_opts *opts,
+                            ss_basins *b, ss_diag *d);
 
 #ifdef __cplusplus
 }

@@ -52,17 +52,15 @@
 
 typedef struct runner {
   const ss_model *m;
-  const ss_basin_opts *o;
+  ss_basin_opts o; /* the options, defaults applied */
   ss_basins *b;
   int max_returns;
   double t_start;
   /* the rows to do, and the next one */
   pthread_mutex_t lock;
-  int next_row;
-  int only_unresolved; /* the second pass */
+  int next_row, end_row;
+  int only_unresolved; /* the cells after a new attractor */
   int stopped;
-  long returns;
-  int max_seen;
 } runner;
 
 void ss_basins_free(ss_basins *b) {
@@ -126,10 +124,10 @@ static int follow(const runner *r, const double x0[4], ss__poll *poll,
 }
 
 static int over_budget(runner *r) {
-  if (!r->stopped && r->o->max_seconds > 0 &&
-      ss__now() - r->t_start > r->o->max_seconds)
+  if (!r->stopped && r->o.max_seconds > 0 &&
+      ss__now() - r->t_start > r->o.max_seconds)
     r->stopped = SS_ELIMIT_TIME;
-  if (!r->stopped && r->o->cancelled && r->o->cancelled(r->o->cancel_cls))
+  if (!r->stopped && r->o.cancelled && r->o.cancelled(r->o.cancel_cls))
     r->stopped = SS_ECANCELED;
   return r->stopped != 0;
 }
@@ -145,7 +143,7 @@ static int must_stop(void *cls) {
 
 static void *worker(void *arg) {
   runner *r = arg;
-  const ss_basin_opts *o = r->o;
+  const ss_basin_opts *o = &r->o;
   int n1 = o->n[1];
   long returns = 0;
   int max_seen = 0;
@@ -153,7 +151,7 @@ static void *worker(void *arg) {
   for (;;) {
     pthread_mutex_lock(&r->lock);
     int i = -1;
-    if (!over_budget(r) && r->next_row < o->n[0])
+    if (!over_budget(r) && r->next_row < r->end_row)
       i = r->next_row++;
     pthread_mutex_unlock(&r->lock);
     if (i < 0)
@@ -174,20 +172,22 @@ static void *worker(void *arg) {
     }
   }
   pthread_mutex_lock(&r->lock);
-  r->returns += returns;
-  if (max_seen > r->max_seen)
-    r->max_seen = max_seen;
+  r->b->returns += returns;
+  if (max_seen > r->b->max_returns)
+    r->b->max_returns = max_seen;
   pthread_mutex_unlock(&r->lock);
   return NULL;
 }
 
-static void run_rows(runner *r) {
+/* Rows @a from to @a to (excluded), on the options' threads. */
+static void run_rows(runner *r, int from, int to) {
   pthread_t th[BASIN_MAX_THREADS];
-  int nt = r->o->threads < 1                   ? 1
-           : r->o->threads > BASIN_MAX_THREADS ? BASIN_MAX_THREADS
-                                               : r->o->threads;
+  int nt = r->o.threads < 1                   ? 1
+           : r->o.threads > BASIN_MAX_THREADS ? BASIN_MAX_THREADS
+                                              : r->o.threads;
   int started = 0;
-  r->next_row = 0;
+  r->next_row = from;
+  r->end_row = to;
   for (int t = 1; t < nt; t++)
     if (pthread_create(&th[started], NULL, worker, r) == 0)
       started++;
@@ -275,7 +275,7 @@ static int add_attractor(const ss_model *m, ss_basins *b, const ss_orbit *o,
 /* The cells still unresolved, simulated on from their last return: the
  * periodic attractors they settle on, as orbits.  1 if one was added. */
 static int from_simulation(runner *r) {
-  const ss_basin_opts *o = r->o;
+  const ss_basin_opts *o = &r->o;
   ss_basins *b = r->b;
   int added = 0, tried = 0;
   ss__poll poll = {must_stop, r, 0, 0};
@@ -293,8 +293,8 @@ static int from_simulation(runner *r) {
         continue;
       tried++;
       ss_attractor at;
-      if (ss__attractor_from(r->m, s, BASIN_SETTLE_TURNS, r->o->max_period,
-                             &poll, &at) != SS_OK ||
+      if (ss__attractor_from(r->m, s, BASIN_SETTLE_TURNS, o->max_period, &poll,
+                             &at) != SS_OK ||
           !at.found || at.n_phases > SS_MAX_PHASES)
         continue;
       ss_orbit orb;
@@ -311,38 +311,61 @@ static int from_simulation(runner *r) {
   return added;
 }
 
-int ss_basins_run(const ss_model *m, const ss_basin_opts *opts, ss_basins *b,
-                  ss_diag *d) {
-  if (!b)
-    return ss__fail(d, SS_EINVAL, "basins", 0, "missing output");
-  memset(b, 0, sizeof *b);
-  if (!m || !opts)
-    return ss__fail(d, SS_EINVAL, "basins", 0, "missing model or options");
-  ss_basin_opts o = *opts;
-  if (o.max_period == 0)
-    o.max_period = 4;
-  if (o.max_period < 1 || o.max_period > SS_BASIN_MAX_TURNS)
-    return ss__fail(d, SS_EINVAL, "max_period", o.max_period,
+/* ---- the stages ----------------------------------------------------------
+ *
+ * A basin map is made in three stages, each a function below, and
+ * ss_basins_run() is their composition:
+ *   0  the attractors of the orbit search, certified (ss_basins_attractors);
+ *   1  the cells of any rows, labelled against those attractors alone, the
+ *      rows independent of one another (ss_basins_rows);
+ *   2  the attractors from simulation over the cells no row resolved, those
+ *      cells labelled again after each, and the counts (ss_basins_finish).
+ * A label of stage 1 depends on its cell and the attractors of stage 0
+ * only, so rows done in any order, in any process, give the same labels;
+ * stage 2 reads every label and goes through the cells in row-major order.
+ */
+
+/* @a in checked, with its defaults, into @a o: SS_OK or SS_EINVAL. */
+static int opts_check(const ss_basin_opts *in, ss_basin_opts *o, ss_diag *d) {
+  *o = *in;
+  if (o->max_period == 0)
+    o->max_period = 4;
+  if (o->max_period < 1 || o->max_period > SS_BASIN_MAX_TURNS)
+    return ss__fail(d, SS_EINVAL, "max_period", o->max_period,
                     "max_period is 1..%d", SS_BASIN_MAX_TURNS);
-  if (o.max_returns < 0)
-    return ss__fail(d, SS_EINVAL, "max_returns", o.max_returns,
+  if (o->max_returns < 0)
+    return ss__fail(d, SS_EINVAL, "max_returns", o->max_returns,
                     "max_returns is >= 0");
   for (int a = 0; a < 2; a++) {
-    if (o.vary[a] < 0 || o.vary[a] > 3 || o.n[a] < 1 || !isfinite(o.from[a]) ||
-        !isfinite(o.to[a]) || (o.n[a] > 1 && !(o.from[a] != o.to[a])))
+    if (o->vary[a] < 0 || o->vary[a] > 3 || o->n[a] < 1 ||
+        !isfinite(o->from[a]) || !isfinite(o->to[a]) ||
+        (o->n[a] > 1 && !(o->from[a] != o->to[a])))
       return ss__fail(d, SS_EINVAL, "axes", a,
                       "axis %d: a state variable 0..3, n >= 1, finite ends "
                       "that differ when n > 1",
                       a);
   }
-  if (o.vary[0] == o.vary[1])
+  if (o->vary[0] == o->vary[1])
     return ss__fail(d, SS_EINVAL, "axes", 1,
                     "the two axes vary the same state variable");
   for (int k = 0; k < 4; k++)
-    if (!isfinite(o.state[k]))
+    if (!isfinite(o->state[k]))
       return ss__fail(d, SS_EINVAL, "state", k, "the state must be finite");
-  if ((double)o.n[0] * (double)o.n[1] > 1e9)
+  if ((double)o->n[0] * (double)o->n[1] > 1e9)
     return ss__fail(d, SS_EINVAL, "axes", 0, "too many cells");
+  return SS_OK;
+}
+
+int ss_basins_alloc(const ss_basin_opts *opts, ss_basins *b, ss_diag *d) {
+  if (!b)
+    return ss__fail(d, SS_EINVAL, "basins", 0, "missing output");
+  memset(b, 0, sizeof *b);
+  if (!opts)
+    return ss__fail(d, SS_EINVAL, "basins", 0, "missing options");
+  ss_basin_opts o;
+  int rc = opts_check(opts, &o, d);
+  if (rc)
+    return rc;
   size_t cells = (size_t)o.n[0] * (size_t)o.n[1];
   b->n[0] = o.n[0];
   b->n[1] = o.n[1];
@@ -353,57 +376,149 @@ int ss_basins_run(const ss_model *m, const ss_basin_opts *opts, ss_basins *b,
     return ss__fail(d, SS_ENOMEM, "", 0, "out of memory for the basins");
   }
   memset(b->labels, SS_BASIN_UNRESOLVED, cells);
-  runner r;
-  memset(&r, 0, sizeof r);
-  r.m = m;
-  r.o = &o;
-  r.b = b;
-  r.max_returns = o.max_returns ? o.max_returns : BASIN_MAX_RETURNS;
-  r.t_start = ss__now();
-  pthread_mutex_init(&r.lock, NULL);
-  /* the attractors the search names */
+  return SS_OK;
+}
+
+/* A runner of @a opts over @a b (from ss_basins_alloc() with the same
+ * slice), its budget from now: SS_OK or SS_EINVAL. */
+static int runner_init(runner *r, const ss_model *m, const ss_basin_opts *opts,
+                       ss_basins *b, ss_diag *d) {
+  memset(r, 0, sizeof *r);
+  if (!m || !opts || !b)
+    return ss__fail(d, SS_EINVAL, "basins", 0,
+                    "missing model, options or basins");
+  int rc = opts_check(opts, &r->o, d);
+  if (rc)
+    return rc;
+  if (!b->labels || !b->attractors || b->n[0] != r->o.n[0] ||
+      b->n[1] != r->o.n[1] || b->n_attractors < 0 ||
+      b->n_attractors > SS_BASIN_MAX_ATTRACTORS)
+    return ss__fail(d, SS_EINVAL, "basins", 0,
+                    "the basins were not allocated for this slice");
+  r->m = m;
+  r->b = b;
+  r->max_returns = r->o.max_returns ? r->o.max_returns : BASIN_MAX_RETURNS;
+  r->t_start = ss__now();
+  pthread_mutex_init(&r->lock, NULL);
+  return SS_OK;
+}
+
+/* The end of a runner: its stop as the status, SS_OK when none. */
+static int runner_end(runner *r, ss_diag *d) {
+  pthread_mutex_destroy(&r->lock);
+  if (r->stopped == SS_ELIMIT_TIME)
+    return ss__fail(d, SS_ELIMIT_TIME, "max_seconds", r->o.max_seconds,
+                    "the basins ran out of their %g s budget",
+                    r->o.max_seconds);
+  if (r->stopped == SS_ECANCELED)
+    return ss__fail(d, SS_ECANCELED, "", 0, "the basins were cancelled");
+  return SS_OK;
+}
+
+/* Stage 0: the attractors the search names, in its order.  SS_OK (also
+ * when stopped: r->stopped says so), or the search's failure. */
+static int stage_attractors(runner *r, ss_diag *d) {
+  ss_basins *b = r->b;
   ss_orbit found[32];
   int nf = 0;
   ss_orbit_opts oo;
   memset(&oo, 0, sizeof oo);
-  oo.max_period = o.max_period;
-  oo.max_seconds = o.max_seconds;
-  oo.cancelled = o.cancelled;
-  oo.cancel_cls = o.cancel_cls;
-  int rc = ss_orbit_find(m, &oo, found, 32, &nf, NULL, d);
+  oo.max_period = r->o.max_period;
+  oo.max_seconds = r->o.max_seconds;
+  oo.cancelled = r->o.cancelled;
+  oo.cancel_cls = r->o.cancel_cls;
+  b->n_attractors = 0;
+  memset(b->attractors, 0, SS_BASIN_MAX_ATTRACTORS * sizeof *b->attractors);
+  int rc = ss_orbit_find(r->m, &oo, found, 32, &nf, NULL, d);
   if (rc == SS_ELIMIT_TIME || rc == SS_ECANCELED)
-    r.stopped = rc;
-  else if (rc) {
-    pthread_mutex_destroy(&r.lock);
+    r->stopped = rc;
+  else if (rc)
     return rc;
-  }
-  ss__poll poll = {must_stop, &r, 0, 0};
+  ss__poll poll = {must_stop, r, 0, 0};
   for (int i = 0; i < nf; i++)
-    add_attractor(m, b, &found[i], 0, &poll);
-  /* the cells; then those that land nowhere, after each new attractor */
-  r.only_unresolved = 0;
-  if (!r.stopped)
-    run_rows(&r);
-  while (!over_budget(&r) && from_simulation(&r)) {
-    r.only_unresolved = 1;
-    run_rows(&r);
-  }
-  pthread_mutex_destroy(&r.lock);
-  b->returns = r.returns;
-  b->max_returns = r.max_seen;
+    add_attractor(r->m, b, &found[i], 0, &poll);
+  return SS_OK;
+}
+
+/* Stage 2: attractors from simulation, the cells that land nowhere run
+ * again after each; then the counts. */
+static void stage_finish(runner *r) {
+  ss_basins *b = r->b;
+  size_t cells = (size_t)b->n[0] * (size_t)b->n[1];
+  r->only_unresolved = 1;
+  while (!over_budget(r) && from_simulation(r))
+    run_rows(r, 0, b->n[0]);
+  b->unresolved = b->perpetual = 0;
+  for (int a = 0; a < b->n_attractors; a++)
+    b->attractors[a].cells = 0;
   for (size_t c = 0; c < cells; c++) {
     unsigned char l = b->labels[c];
     if (l == SS_BASIN_UNRESOLVED)
       b->unresolved++;
     else if (l == SS_BASIN_PERPETUAL)
       b->perpetual++;
-    else
+    else if (l < b->n_attractors)
       b->attractors[l].cells++;
   }
-  if (r.stopped == SS_ELIMIT_TIME)
-    return ss__fail(d, SS_ELIMIT_TIME, "max_seconds", o.max_seconds,
-                    "the basins ran out of their %g s budget", o.max_seconds);
-  if (r.stopped == SS_ECANCELED)
-    return ss__fail(d, SS_ECANCELED, "", 0, "the basins were cancelled");
-  return SS_OK;
+}
+
+int ss_basins_attractors(const ss_model *m, const ss_basin_opts *opts,
+                         ss_basins *b, ss_diag *d) {
+  runner r;
+  int rc = runner_init(&r, m, opts, b, d);
+  if (rc)
+    return rc;
+  rc = stage_attractors(&r, d);
+  int end = runner_end(&r, d);
+  return rc ? rc : end;
+}
+
+int ss_basins_rows(const ss_model *m, const ss_basin_opts *opts, ss_basins *b,
+                   int row, int rows, ss_diag *d) {
+  runner r;
+  int rc = runner_init(&r, m, opts, b, d);
+  if (rc)
+    return rc;
+  if (row < 0 || rows < 0 || row > b->n[0] - rows) {
+    pthread_mutex_destroy(&r.lock);
+    return ss__fail(d, SS_EINVAL, "rows", row,
+                    "rows %d to %d are not rows of the slice (0 to %d)", row,
+                    row + rows, b->n[0]);
+  }
+  run_rows(&r, row, row + rows);
+  return runner_end(&r, d);
+}
+
+int ss_basins_finish(const ss_model *m, const ss_basin_opts *opts, ss_basins *b,
+                     ss_diag *d) {
+  runner r;
+  int rc = runner_init(&r, m, opts, b, d);
+  if (rc)
+    return rc;
+  stage_finish(&r);
+  return runner_end(&r, d);
+}
+
+int ss_basins_run(const ss_model *m, const ss_basin_opts *opts, ss_basins *b,
+                  ss_diag *d) {
+  if (!b)
+    return ss__fail(d, SS_EINVAL, "basins", 0, "missing output");
+  memset(b, 0, sizeof *b);
+  if (!m || !opts)
+    return ss__fail(d, SS_EINVAL, "basins", 0, "missing model or options");
+  int rc = ss_basins_alloc(opts, b, d);
+  if (rc)
+    return rc;
+  /* the three stages under one budget: a stop in one ends the others */
+  runner r;
+  if ((rc = runner_init(&r, m, opts, b, d)))
+    return rc;
+  if ((rc = stage_attractors(&r, d))) {
+    pthread_mutex_destroy(&r.lock);
+    return rc;
+  }
+  if (!r.stopped)
+    run_rows(&r, 0, b->n[0]);
+  stage_finish(&r);
+  return runner_end(&r, d);
 }
