@@ -34,7 +34,8 @@
  * roots of the reduced equations are of that kind).  Newton on the reduced
  * equations times det (forward differences) starts at the centre of each
  * candidate cell; where Newton's first step leaves the cell's reach, the
- * cell is split and each quarter tried again, down to 1/8.  A root is kept if
+ * cell is split and each quarter tried again, down to 1/8 (or less deep, as
+ * the caller asks).  A root is kept if
  * its phases, sampled on the grid and at their ends, keep the rules of their
  * modes (implausible()), once.
  */
@@ -49,7 +50,7 @@
 #define SCAN_T3_TURN 1.0
 #define SCAN_NEWTON_ITERS 16
 #define SCAN_MAX_CELLS 1000 /* per axis */
-#define SCAN_REFINE 3       /* halvings of a cell Newton fails in */
+#define SCAN_MAX_REFINE 3   /* halvings of a cell Newton fails in, at most */
 
 /* The slip from y0(s) for time t: x = Y s + y. */
 typedef struct slip_map {
@@ -273,6 +274,7 @@ typedef struct scan {
   double dmax; /* the box */
   double scale;
   double h;    /* the grid's step */
+  int refine;  /* halvings of a cell Newton fails in */
   long np;     /* grid points per axis */
   long stride; /* fine steps per grid step: 2^SCAN_MAX_DEPTH */
   slip_map *S; /* the slip for times j h / stride */
@@ -660,17 +662,18 @@ static void cell_sos(scan *sc, long i1, long k1, long i2, long k2, point *c0,
   if (!(lo > -0.5 && hi < dm + 0.5))
     return;
   try_cell(sc, (double)i1 * hf, (double)k1 * hf, (double)i2 * hf,
-           (double)k2 * hf, c, SCAN_REFINE);
+           (double)k2 * hf, c, sc->refine);
 }
 
 int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
-                     double (*roots)[3], int max_roots, int *n_roots,
-                     double (*rejected)[3], int *n_rejected, int *newton_starts,
-                     long *cells, double *step, int (*stop)(void *),
-                     void *stop_cls) {
+                     int refine, double (*roots)[3], int max_roots,
+                     int *n_roots, double (*rejected)[3], int *n_rejected,
+                     int *newton_starts, long *cells, double *step,
+                     int (*stop)(void *), void *stop_cls) {
   *n_roots = 0;
   *n_rejected = 0;
-  if ((n != 2 && n != 3) || !(dmax > 0) || !(h > 0))
+  if ((n != 2 && n != 3) || !(dmax > 0) || !(h > 0) || refine < 0 ||
+      refine > SCAN_MAX_REFINE)
     return SS_EINVAL;
   double side = ceil(dmax / h);
   long N = side < 8 ? 8 : side > SCAN_MAX_CELLS ? SCAN_MAX_CELLS : (long)side;
@@ -704,6 +707,7 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
              .dmax = dmax,
              .scale = fmax(p->V, (p->ur - p->us) / p->chi),
              .h = h,
+             .refine = refine,
              .np = np,
              .stride = stride,
              .S = S,
@@ -743,7 +747,7 @@ int ss__scan_period1(const ss_model *m, int n, double dmax, double h,
       } else {
         point *const c[4] = {&prv[j], &prv[j + 1], &cur[j], &cur[j + 1]};
         try_cell(&sc, (double)(i - 1) * h, (double)i * h, (double)j * h,
-                 (double)(j + 1) * h, c, SCAN_REFINE);
+                 (double)(j + 1) * h, c, refine);
       }
     }
   }

@@ -646,16 +646,17 @@ static void from_simulations(collect *c, double seeds[][2], int ns_sim,
 }
 
 /* Source 2 for family f: every root of its period-1 duration equations in
- * the box dmax, from the scan (scan.c) at step h, solved unless found
- * already; when none of the family is feasible, its closest rejected roots
- * solved too, to say why in numbers (the report keeps the closest to
- * feasible). */
-static int scan_family(collect *c, int f, double dmax, double h, ss_diag *d) {
+ * the box dmax, from the scan (scan.c) at step h splitting refine times,
+ * solved unless found already; when none of the family is feasible, its
+ * closest rejected roots solved too, to say why in numbers (the report
+ * keeps the closest to feasible). */
+static int scan_family(collect *c, int f, double dmax, double h, int refine,
+                       ss_diag *d) {
   ss_orbit_report *rep = c->rep;
   double roots[SCAN_MAX_ROOTS][3], rejected[2][3];
   int nr = 0, n_rejected = 0, before = c->n;
-  int rc = ss__scan_period1(c->m, 2 + f, dmax, h, roots, SCAN_MAX_ROOTS, &nr,
-                            rejected, &n_rejected, &rep->newton_starts,
+  int rc = ss__scan_period1(c->m, 2 + f, dmax, h, refine, roots, SCAN_MAX_ROOTS,
+                            &nr, rejected, &n_rejected, &rep->newton_starts,
                             &rep->scan_cells, &rep->scan_step, scan_stop, c);
   rep->scan_box = dmax;
   if (rc == SS_ENOMEM)
@@ -672,24 +673,40 @@ static int scan_family(collect *c, int f, double dmax, double h, ss_diag *d) {
   return SS_OK;
 }
 
+/* The scans of each effort: the grid's step in radians of the fastest
+ * motion (the fast mode, or x1 under stick), and how many times a cell
+ * Newton steps out of is split (scan.c).  A finer grid alone does not find
+ * every root a coarser one finds: the cell test judges a cell by its
+ * corners, and where two zero lines run side by side a cell can hold a root
+ * it does not see, which a coarser grid reached by Newton from a
+ * neighbouring cell (at chi 0.3035, eta 0.2236, us 0.0399, ur 0.2567, a
+ * stick of 0.095 that a step of 0.49 and 0.29 found and one of 0.148
+ * lost).  So each effort makes every Newton start of the one below and more:
+ * effort 1 is effort 2's grid without the splits, effort 3 effort 2's scan
+ * and then one on a grid twice as fine.  A step of 0 ends the list. */
+#define EFFORT_SCANS 2
+static const struct {
+  double step;
+  int refine;
+} EFFORT_SCAN[3][EFFORT_SCANS] = {
+    {{0.3, 0}, {0, 0}}, {{0.3, 3}, {0, 0}}, {{0.3, 3}, {0.15, 3}}};
+
 /* Source 2: every root of the period-1 duration equations of the two
  * families asked for, with each duration within 1.5 slow modal periods,
- * from a scan of the equations reduced to two durations at a step of 0.3
- * rad of the fastest motion (the fast mode, or x1 under stick). */
+ * from the scans of the effort (the report gives the finest step). */
 static int from_scan(collect *c, unsigned kinds, int effort, ss_diag *d) {
   const ss_model *m = c->m;
   double dmax = family_box(m);
-  double h = (effort == 1   ? 0.5
-              : effort == 2 ? 0.3
-                            : 0.15) /
-             fmax(m->w[1], 1.0);
-  for (int f = 0; f < 2; f++) {
-    if (!(kinds & FAMILY_KIND[f]) || over_budget(c))
-      continue;
-    int rc = scan_family(c, f, dmax, h, d);
-    if (rc)
-      return rc;
-  }
+  for (int f = 0; f < 2; f++)
+    for (int l = 0; l < EFFORT_SCANS && EFFORT_SCAN[effort - 1][l].step > 0;
+         l++) {
+      if (!(kinds & FAMILY_KIND[f]) || over_budget(c))
+        continue;
+      double h = EFFORT_SCAN[effort - 1][l].step / fmax(m->w[1], 1.0);
+      int rc = scan_family(c, f, dmax, h, EFFORT_SCAN[effort - 1][l].refine, d);
+      if (rc)
+        return rc;
+    }
   return SS_OK;
 }
 
