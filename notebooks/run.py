@@ -1,0 +1,59 @@
+#!/usr/bin/env python3
+"""Run one notebook top to bottom against a daemon of its own:
+
+  python3 notebooks/run.py STICKSLIPD NOTEBOOK [FIGURES_DIR]
+
+Starts STICKSLIPD on a free port, then `jupyter nbconvert --execute` (from
+Debian's jupyter-nbconvert) with STICKSLIP_URL set to it and the figures
+written to FIGURES_DIR (default: notebooks/figures, the ones the README
+shows); the executed notebook goes beside the figures.  Exits 77 (skipped)
+when nbconvert or the kernel's packages are missing.
+"""
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def main() -> int:
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    binary, notebook = sys.argv[1], os.path.abspath(sys.argv[2])
+    figures = os.path.abspath(sys.argv[3] if len(sys.argv) > 3
+                              else os.path.join(HERE, "figures"))
+    nbconvert = shutil.which("jupyter-nbconvert")
+    probe = subprocess.run([sys.executable, "-c",
+                            "import ipykernel, matplotlib, numpy, pandas"],
+                           capture_output=True)
+    if not nbconvert or probe.returncode:
+        print("notebooks: jupyter-nbconvert, python3-ipykernel, "
+              "-matplotlib, -numpy or -pandas missing: skipped")
+        return 77
+    d = subprocess.Popen([binary, "--port", "0", "--quiet",
+                          "--max-seconds", "120"],
+                         stderr=subprocess.PIPE, text=True)
+    line = d.stderr.readline() if d.stderr else ""
+    m = re.search(r"http://[^ \n]+", line)
+    if not m:
+        d.kill()
+        sys.exit("notebooks: the daemon did not start: " + line)
+    os.makedirs(figures, exist_ok=True)
+    env = dict(os.environ, STICKSLIP_URL=m.group(0).rstrip("/"),
+               PYDEVD_DISABLE_FILE_VALIDATION="1",
+               STICKSLIP_FIGURES=figures)
+    try:
+        rc = subprocess.run([nbconvert, "--execute", "--to", "notebook",
+                             "--ExecutePreprocessor.timeout=120",
+                             "--output-dir", figures, notebook],
+                            env=env, cwd=HERE).returncode
+    finally:
+        d.terminate()
+        d.wait()
+    return rc
+
+
+if __name__ == "__main__":
+    sys.exit(main())
