@@ -12,8 +12,11 @@
    continued along ur) as one /batch job: the wall time from the POST to
    the last line read, and items per second.
 Both on 1 and on 2 replicas sharing one store (sqlite in a temporary
-directory; or --store URI for a PostgreSQL).  The machine has 2 cores, so
-two replicas do not scale the work: they share the same two cores.
+directory; or --store URI for a PostgreSQL).  Each daemon computes on one
+thread (--map-threads 1, --job-workers 1), so that the synchronous map and
+the job on one replica use the same CPU and their ratio is the cost of
+cutting and storing; two replicas compute a job's chunks on two threads.
+The machine has 2 cores, so two replicas can at most double that.
 
 Usage: bench/jobs.py STICKSLIPD [results_dir] [--cells N] [--items N]
                      [--store URI]   (writes jobs.md in results_dir)
@@ -37,7 +40,9 @@ GUESS = [9.4545, 2.23587]  # the paper's overshoot orbit's phase durations
 def start(daemon, store, extra=()):
     proc = subprocess.Popen(
         [daemon, "--port", "0", "--quiet", "--job-store", store,
-         "--max-seconds", "600", "--client-workers",
+         "--max-seconds", "600", "--max-map-cells", "40000",
+         "--map-threads", "1", "--job-workers", "1",
+         "--client-workers",
          str(os.cpu_count() or 1), *extra],
         stderr=subprocess.PIPE, text=True)
     line = proc.stderr.readline()
