@@ -1193,6 +1193,81 @@ static void test_transversality_curve(void) {
   ASSERT_EQ_INT(seen, 1);
 }
 
+/* EVIDENCE: README "Families": a phase that ends tangentially: orbits
+ * whose stick ends with a slope too small for the event finder to tell
+ * the crossing from a touch by the values (the band, 3e-7 to 1e-8 below
+ * the end here) are accepted by the slope, judged against its own rounding
+ * bound: the family (the README's, at its rounded parameters) is feasible
+ * to within 1e-9 of its end at ur = 4.407438357428859 (the value an
+ * independent solver gives), and at 1e-7 below it the search returns the
+ * orbit and its certificate counts it (before: rejected as grazing,
+ * certificate complete without it); the rk8pd reference gives a rising end */
+static void test_tangency_band(void) {
+  const ss_params p = {0.4572, 0.9573, 0.2514, 3.9804, 1};
+  const double end = 4.407438357428859;
+  ss_model m;
+  ss_orbit_opts oo;
+  ss_orbit found[16], *start = NULL;
+  int n = 0;
+  memset(&oo, 0, sizeof oo);
+  oo.kinds = SS_ORBIT_STICKSLIP;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, found, 16, &n, NULL, NULL), SS_OK);
+  for (int i = 0; i < n; i++)
+    if (found[i].n_phases == 2 && found[i].period > 5 && found[i].period < 6)
+      start = &found[i];
+  ASSERT_TRUE(start != NULL);
+  if (!start)
+    return;
+  ss_cont_opts co;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_UR;
+  co.lo = 0.3 * p.ur;
+  co.hi = 3 * p.ur;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&p, start, &co, &b, NULL), SS_OK);
+  const ss_special *g = NULL;
+  for (int i = 0; i < b.n_special; i++)
+    if (b.special[i].margin == SS_MARGIN_TRANSVERSALITY)
+      g = &b.special[i];
+  ASSERT_TRUE(g != NULL);
+  double last = g ? fabs(g->value - g->at.value) / end : NAN,
+         located = g ? g->value : NAN;
+  if (g) {
+    ASSERT_NEAR_REL(g->value, end, 1e-12);
+    ASSERT_TRUE(last < 1e-9);
+  }
+  ss_branch_free(&b);
+  /* 1e-7 below the end: found, certified, and rising at its end */
+  ss_params q = p;
+  q.ur = end * (1 - 1e-7);
+  ss_orbit_report rep;
+  const ss_orbit *o = NULL;
+  memset(&rep, 0, sizeof rep);
+  oo.certify = 1;
+  oo.max_period = 1;
+  ASSERT_EQ_INT(ss_model_init(&m, &q, NULL), SS_OK);
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, found, 16, &n, &rep, NULL), SS_OK);
+  for (int i = 0; i < n; i++)
+    if (found[i].n_phases == 2 && fabs(found[i].period - 6.0036) < 1e-3)
+      o = &found[i];
+  ASSERT_TRUE(o != NULL);
+  ASSERT_TRUE(rep.cert[0].ran && rep.cert[0].complete);
+  ASSERT_EQ_INT(rep.cert[0].rejected, 0);
+  ASSERT_EQ_INT(rep.cert[0].orbits, rep.cert[0].roots);
+  if (!o)
+    return;
+  double sl = ref_stick_end_slope(&q, o->modes, o->durations, o->x0, 1);
+  printf("the tangency band: the family's last feasible point %.1e below "
+         "its end at ur = %.15g; 1e-7 below it the orbit of period %.9g is "
+         "returned (end slope %.3g, rk8pd %.3g, residual %.1e), certified "
+         "with %d roots, %d orbits, %d rejected\n",
+         last, located, o->period, o->transversal.value, sl, o->residual,
+         rep.cert[0].roots, rep.cert[0].orbits, rep.cert[0].rejected);
+  ASSERT_TRUE(o->transversal.value > 1e-7 && o->residual < 1e-13);
+  ASSERT_TRUE(sl > 1e-7);
+}
+
 /* The bits of two doubles are the same (a NaN equals itself). */
 static int same_bits(double a, double b) {
   return memcmp(&a, &b, sizeof a) == 0;
@@ -1761,6 +1836,7 @@ int main(void) {
   test_physical();
   test_interior_grazing_curve();
   test_transversality_curve();
+  test_tangency_band();
   test_study();
   test_study_options();
   TEST_DONE();
