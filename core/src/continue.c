@@ -28,6 +28,7 @@
 #include "continue.h"
 #include "internal.h"
 #include "modal.h"
+#include "orbit.h"
 #include "params.h"
 
 #define NMAX ARC_NMAX
@@ -139,8 +140,6 @@ static ss_margin smallest_margin(const ss_orbit *o, ss_margin_id *id) {
   return *all[best];
 }
 
-/* The orbit at y: feasibility (ss_orbit_check) and stability.  SS_OK,
- * SS_INFEASIBLE (reason in d), or a failure. */
 /* The model and the orbit (modes, durations, start z0 from the duration
  * equations) at the family's point y, unchecked.  *no_model: the
  * parameter's value gives no model (then the rest is not filled). */
@@ -160,9 +159,41 @@ static int orbit_at(const cont *c, const double *y, ss_model *m, ss_orbit *o,
   return ss_orbit_equations(m, c->n, c->modes, o->durations, o->z0, F, NULL);
 }
 
+/* The point of the family for the orbit @a o at model @a m: feasibility
+ * (ss_orbit_check) and stability.  SS_OK, SS_INFEASIBLE (reason in d), or
+ * a failure. */
+static int point_of(const cont *c, const ss_model *m, ss_orbit *o, double res,
+                    ss_cont_point *pt, ss_diag *d) {
+  int rc;
+  if ((rc = ss_orbit_check(m, o, d)) != SS_OK)
+    return rc;
+  ss_stab_opts so = {o->n_turns, 0};
+  ss_stab st;
+  if ((rc = ss_stability(m, c->n, c->modes, o->durations, o->z0, &so, &st)) !=
+      SS_OK)
+    return rc == SS_ESINGULAR ? ss__fail(d, SS_INFEASIBLE, "phases", 0,
+                                         "a phase ends tangentially (grazing)")
+                              : rc;
+  memcpy(pt->durations, o->durations, sizeof o->durations);
+  pt->period = o->period;
+  memcpy(pt->z0, o->z0, sizeof o->z0);
+  pt->n_turns = o->n_turns;
+  for (int k = 0; k < 2; k++) {
+    pt->eig_re[k] = st.eig_re[k];
+    pt->eig_im[k] = st.eig_im[k];
+  }
+  pt->spectral_radius = st.spectral_radius;
+  pt->stable = st.stable;
+  pt->residual = res;
+  pt->min_margin = smallest_margin(o, NULL);
+  return SS_OK;
+}
+
+/* The point of the family at y.  SS_OK, SS_INFEASIBLE (reason in d), or a
+ * failure. */
 static int point_at(const cont *c, const double *y, double res,
                     ss_cont_point *pt, ss_diag *d) {
-  int n = c->n, no_model;
+  int no_model;
   ss_model m;
   ss_orbit o;
   memset(pt, 0, sizeof *pt);
@@ -173,31 +204,9 @@ static int point_at(const cont *c, const double *y, double res,
                     "the parameter left its domain");
   if (rc != SS_OK)
     return rc;
-  if ((rc = ss_orbit_check(&m, &o, d)) != SS_OK)
-    return rc;
-  ss_stab_opts so = {o.n_turns, 0};
-  ss_stab st;
-  if ((rc = ss_stability(&m, n, c->modes, o.durations, o.z0, &so, &st)) !=
-      SS_OK)
-    return rc == SS_ESINGULAR ? ss__fail(d, SS_INFEASIBLE, "phases", 0,
-                                         "a phase ends tangentially (grazing)")
-                              : rc;
-  memcpy(pt->durations, o.durations, sizeof o.durations);
-  pt->period = o.period;
-  memcpy(pt->z0, o.z0, sizeof o.z0);
-  pt->n_turns = o.n_turns;
-  for (int k = 0; k < 2; k++) {
-    pt->eig_re[k] = st.eig_re[k];
-    pt->eig_im[k] = st.eig_im[k];
-  }
-  pt->spectral_radius = st.spectral_radius;
-  pt->stable = st.stable;
-  pt->residual = res;
-  pt->min_margin = smallest_margin(&o, NULL);
-  return SS_OK;
+  return point_of(c, &m, &o, res, pt, d);
 }
 
-/* The name of the smallest margin of the orbit at y (for a grazing). */
 /* The smallest margin of the orbit at y (for a grazing). */
 static ss_margin_id min_margin_id(const cont *c, const double *y) {
   ss_model m;
@@ -276,6 +285,44 @@ static void add_special(ss_branch *b, const ss_special *s) {
     b->special[b->n_special++] = *s;
 }
 
+/* The orbit of the family at the parameter value of chord fraction th,
+ * solved with its start as unknowns (ss__orbit_solve_full) from the chord's
+ * durations and the start interpolated between the ends pa, pb.  Where a
+ * real multiplier is +1 the elimination of the start through (5.1) is
+ * singular and the duration equations have a pole on the family, so the
+ * corrector on the chord fails within about 1e-5 of the crossing; this
+ * system does not.  Used between points with no fold between them, where
+ * the parameter is monotone along the family. */
+static int at_chord_value(const cont *c, const double *ya, const double *yb,
+                          const ss_cont_point *pa, const ss_cont_point *pb,
+                          double th, double *y, ss_cont_point *pt) {
+  int np = c->n + 1;
+  double res;
+  ss_model m;
+  ss_orbit o;
+  for (int k = 0; k < np; k++)
+    y[k] = ya[k] + th * (yb[k] - ya[k]);
+  memset(pt, 0, sizeof *pt);
+  memset(&o, 0, sizeof o);
+  pt->value = value_of(c, y);
+  if (model_at(c, pt->value, &m) != SS_OK)
+    return SS_EDOMAIN;
+  o.n_phases = c->n;
+  o.kind = ss_orbit_kind_of(c->n, c->modes);
+  for (int k = 0; k < c->n; k++) {
+    o.modes[k] = c->modes[k];
+    o.durations[k] = c->T * y[k];
+  }
+  for (int i = 0; i < 4; i++)
+    o.z0[i] = pa->z0[i] + th * (pb->z0[i] - pa->z0[i]);
+  int rc = ss__orbit_solve_full(&m, c->n, c->modes, o.durations, o.z0, &res);
+  if (rc != SS_OK)
+    return rc;
+  for (int k = 0; k < c->n; k++)
+    y[k] = o.durations[k] / c->T;
+  return point_of(c, &m, &o, res, pt, NULL);
+}
+
 /* Locate the sign change of test function @a which between the accepted
  * points ya (value fa) and yb (fb) by regula falsi (Illinois) on the chord
  * fraction, to a relative 1e-10 in the parameter. */
@@ -305,9 +352,11 @@ static void locate(cont *c, const double *ya, const double *yb,
     double th = lo + flo * (lo - hi) / (fhi - flo);
     if (!(th > lo && th < hi) || it % 4 == 3)
       th = 0.5 * (lo + hi); /* keep the bracket shrinking */
-    double f;
-    if (on_chord(c, ya, yb, th, y, &res) != SS_OK ||
-        test_value(c, y, dir, which, res, &f, &pt) != SS_OK)
+    double f, psi[3];
+    if (which == 0 ? at_chord_value(c, ya, yb, pa, pb, th, y, &pt) != SS_OK ||
+                         (crossings(&pt, psi), f = psi[0], 0)
+                   : on_chord(c, ya, yb, th, y, &res) != SS_OK ||
+                         test_value(c, y, dir, which, res, &f, &pt) != SS_OK)
       break;
     memcpy(best, y, sizeof y[0] * (size_t)np);
     pbest = pt;
@@ -347,16 +396,25 @@ static void locate(cont *c, const double *ya, const double *yb,
   static const char *const WHAT[] = {
       "", "the family turns back", "a real multiplier crosses +1",
       "a real multiplier crosses -1", "a complex pair crosses the unit circle"};
-  snprintf(s.detail, sizeof s.detail, "%.40s at %.4s = %.15g%.60s%.40s%.30s",
-           WHAT[kind], cont_name(c), s.value,
+  /* located: where; not located: the bracket it is known to lie in, and
+   * that the orbit given is only the last one tried, at one of its ends */
+  char where[160];
+  if (ok)
+    snprintf(where, sizeof where, "at %.4s = %.15g", cont_name(c), s.value);
+  else
+    snprintf(where, sizeof where,
+             "between %.4s = %.15g and %.15g (not located to 1e-10; the "
+             "orbit given is at %.15g)",
+             cont_name(c), fmin(vlo, vhi), fmax(vlo, vhi), s.value);
+  snprintf(s.detail, sizeof s.detail, "%.40s %.159s%.60s%.40s", WHAT[kind],
+           where,
            kind == SS_SPECIAL_FOLD && saddle_node
                ? ", a saddle-node (a real multiplier crosses +1)"
                : "",
            s.stable_before != s.stable_after
                ? (s.stable_before ? "; stable below, unstable above"
                                   : "; unstable below, stable above")
-               : "",
-           ok ? "" : " (not located to 1e-10)");
+               : "");
   (void)best;
   add_special(c->b, &s);
 }

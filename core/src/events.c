@@ -195,6 +195,13 @@ static double polish(const ss_trig *g, const bounds *b, double lo, double hi,
   return t;
 }
 
+/* The bound on the rounding error of g' as ss_trig_eval computes it: the
+ * terms w_k B_k, each of size at most R_k w_k with a relative error of a
+ * few ulps, and the line's slope. */
+static double slope_tol_of(const ss_trig *g, const bounds *b) {
+  return TOL_ULPS * DBL_EPSILON * (fabs(g->c1) + b->M1);
+}
+
 /* At a point a where g(a) >= -tol after certified steps from below, decide
  * between a crossing (return SS_OK, *t the zero) and a tangency (SS_GRAZING,
  * *t the touching maximum).  A crossing has a slope well above the rounding
@@ -215,7 +222,7 @@ static int classify(const ss_trig *g, const bounds *b, double a, double tol,
    * about TOL_ULPS eps (|c1| + sum R_k w_k); divided by a small |g''| that
    * noise can keep the step above a few ulps of s for ever, so the noise
    * level ends the iteration too. */
-  double slope_noise = TOL_ULPS * DBL_EPSILON * (fabs(g->c1) + b->M1);
+  double slope_noise = slope_tol_of(g, b);
   double s = a;
   int found = 0;
   for (int i = 0; i < 60; i++) {
@@ -540,4 +547,12 @@ int ss__trig_at_zero(const ss_trig *g, double t0, int *dir) {
   }
   *dir = departure(&b, tol, v);
   return 1;
+}
+
+int ss__trig_rises_at(const ss_trig *g, double t) {
+  bounds b;
+  double v[2];
+  get_bounds(g, &b);
+  ss_trig_eval(g, t, 1, v);
+  return v[1] > slope_tol_of(g, &b);
 }

@@ -12,6 +12,11 @@
  * zero, returns 0 and *dir is its sign. */
 int ss__trig_at_zero(const ss_trig *g, double t0, int *dir);
 
+/* Whether g rises at t beyond the rounding of its slope: g' as computed
+ * exceeds the bound on its evaluation's error, so g' > 0 at t in exact
+ * arithmetic. */
+int ss__trig_rises_at(const ss_trig *g, double t);
+
 /* The certificate of a first-root search, kept to answer the next search of
  * a nearby function at a fraction of the cost.  A simulation
  * that settles onto a periodic motion searches, period after period, for

@@ -56,6 +56,13 @@ ss_orbit_kind ss_orbit_kind_of(int n, const ss_mode *modes) {
 
 /* ---- the duration equations ------------------------------------------- */
 
+static double maxabs(const double *v, int n) {
+  double r = 0;
+  for (int i = 0; i < n; i++)
+    r = fmax(r, fabs(v[i]));
+  return r;
+}
+
 typedef struct oeq {
   const ss_model *m;
   int n;
@@ -101,63 +108,89 @@ static double end_value(const oeq *q, int k, const double Z[4]) {
   return Z[3] - p->V;
 }
 
+/* The phase maps at tau and their prefixes: after k phases the state is
+ * P[k] z0 + qv[k]; A, c are phase k's map and dA, dc their derivatives in
+ * its duration. */
+typedef struct oeq_maps {
+  double A[MAXP][16], c[MAXP][4], dA[MAXP][16], dc[MAXP][4];
+  double P[MAXP + 1][16], qv[MAXP + 1][4];
+} oeq_maps;
+
+static void maps_eval(const oeq *q, const double *tau, oeq_maps *x) {
+  static const double I4[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+  for (int k = 0; k < q->n; k++)
+    ss_transition(q->m, q->modes[k], tau[k], x->A[k], x->c[k], x->dA[k],
+                  x->dc[k]);
+  memcpy(x->P[0], I4, sizeof I4);
+  memset(x->qv[0], 0, sizeof x->qv[0]);
+  for (int k = 0; k < q->n; k++) {
+    mat4_mul(x->A[k], x->P[k], x->P[k + 1]);
+    memcpy(x->qv[k + 1], x->c[k], sizeof x->c[k]);
+    mat4_vec(x->A[k], x->qv[k], x->qv[k + 1], 1);
+  }
+}
+
+/* The derivatives of the prefixes in tau_j: dP[k], dq[k] for k > j (the
+ * earlier ones do not depend on it). */
+static void maps_deriv(const oeq *q, const oeq_maps *x, int j,
+                       double dP[MAXP + 1][16], double dq[MAXP + 1][4]) {
+  /* dP_{j+1} = dA_j P_j, dq_{j+1} = dA_j q_j + dc_j */
+  mat4_mul(x->dA[j], x->P[j], dP[j + 1]);
+  memcpy(dq[j + 1], x->dc[j], sizeof dq[j + 1]);
+  mat4_vec(x->dA[j], x->qv[j], dq[j + 1], 1);
+  for (int k = j + 1; k < q->n; k++) {
+    mat4_mul(x->A[k], dP[k], dP[k + 1]);
+    mat4_vec(x->A[k], dq[k], dq[k + 1], 0);
+  }
+}
+
+/* The matrix of (5.1) in z0: rows 1-3 of N - I, row 4 picking z2'(0). */
+static void periodicity_matrix(const oeq_maps *x, int n, double B[16]) {
+  for (int i = 0; i < 3; i++)
+    for (int j = 0; j < 4; j++)
+      B[4 * i + j] = x->P[n][4 * i + j] - (i == j);
+  B[12] = B[13] = B[14] = 0;
+  B[15] = 1;
+}
+
+/* The duration equations at the start z0: (3.1) and the end condition of
+ * every phase but the last. */
+static void duration_rows(const oeq *q, const oeq_maps *x, const double z0[4],
+                          double *F) {
+  const ss_params *p = &q->m->p;
+  F[0] = p->chi * (z0[1] - z0[0]) - (p->ur - p->us);
+  for (int k = 0; k + 1 < q->n; k++) {
+    double Z[4];
+    memcpy(Z, x->qv[k + 1], sizeof Z);
+    mat4_vec(x->P[k + 1], z0, Z, 1);
+    F[k + 1] = end_value(q, k, Z);
+  }
+}
+
 /* F(tau) and, if J != NULL, its Jacobian (n x n row-major); z0 the start. */
 static int oeq_eval(const oeq *q, const double *tau, double z0[4], double *F,
                     double *J) {
   const int n = q->n;
   const ss_params *p = &q->m->p;
-  double A[MAXP][16], c[MAXP][4], dA[MAXP][16], dc[MAXP][4];
-  double P[MAXP + 1][16], qv[MAXP + 1][4];
-  static const double I4[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-  for (int k = 0; k < n; k++)
-    ss_transition(q->m, q->modes[k], tau[k], A[k], c[k], dA[k], dc[k]);
-  memcpy(P[0], I4, sizeof I4);
-  memset(qv[0], 0, sizeof qv[0]);
-  for (int k = 0; k < n; k++) {
-    mat4_mul(A[k], P[k], P[k + 1]);
-    memcpy(qv[k + 1], c[k], sizeof c[k]);
-    mat4_vec(A[k], qv[k], qv[k + 1], 1);
-  }
+  oeq_maps x;
+  maps_eval(q, tau, &x);
   /* (5.1): rows 1-3 of (N - I) z0 = -c, row 4 replaced by z2'(0) = V. */
-  double B[16], LU[16];
+  double LU[16];
   int piv[4];
-  for (int i = 0; i < 3; i++)
-    for (int j = 0; j < 4; j++)
-      B[4 * i + j] = P[n][4 * i + j] - (i == j);
-  B[12] = B[13] = B[14] = 0;
-  B[15] = 1;
-  memcpy(LU, B, sizeof B);
+  periodicity_matrix(&x, n, LU);
   if (lu_factor(LU, 4, piv, 1e-13))
     return SS_ESINGULAR;
-  z0[0] = -qv[n][0];
-  z0[1] = -qv[n][1];
-  z0[2] = -qv[n][2];
+  z0[0] = -x.qv[n][0];
+  z0[1] = -x.qv[n][1];
+  z0[2] = -x.qv[n][2];
   z0[3] = p->V;
   lu_solve(LU, 4, piv, z0);
-  F[0] = p->chi * (z0[1] - z0[0]) - (p->ur - p->us);
-  for (int k = 0; k + 1 < n; k++) {
-    double Z[4];
-    memcpy(Z, qv[k + 1], sizeof Z);
-    mat4_vec(P[k + 1], z0, Z, 1);
-    F[k + 1] = end_value(q, k, Z);
-  }
+  duration_rows(q, &x, z0, F);
   if (!J)
     return SS_OK;
-  /* Derivatives of the prefix maps: d(P_{k+1}, q_{k+1})/dtau_j for j <= k. */
   for (int j = 0; j < n; j++) {
-    double dP[16], dq[4], tmp[16], dz0[4];
-    /* dP_{j+1} = dA_j P_j, dq_{j+1} = dA_j q_j + dc_j */
-    double dPk[MAXP + 1][16], dqk[MAXP + 1][4];
-    mat4_mul(dA[j], P[j], dP);
-    memcpy(dq, dc[j], sizeof dq);
-    mat4_vec(dA[j], qv[j], dq, 1);
-    memcpy(dPk[j + 1], dP, sizeof dP);
-    memcpy(dqk[j + 1], dq, sizeof dq);
-    for (int k = j + 1; k < n; k++) {
-      mat4_mul(A[k], dPk[k], tmp);
-      memcpy(dPk[k + 1], tmp, sizeof tmp);
-      mat4_vec(A[k], dqk[k], dqk[k + 1], 0);
-    }
+    double dPk[MAXP + 1][16], dqk[MAXP + 1][4], dz0[4];
+    maps_deriv(q, &x, j, dPk, dqk);
     /* dz0 = B^-1 (-(dM z0 + dc)[0..2], 0) */
     double r[4] = {0, 0, 0, 0};
     mat4_vec(dPk[n], z0, r, 0);
@@ -168,7 +201,7 @@ static int oeq_eval(const oeq *q, const double *tau, double z0[4], double *F,
     J[j] = p->chi * (dz0[1] - dz0[0]);
     for (int k = 0; k + 1 < n; k++) {
       double dZ[4], gv[4];
-      mat4_vec(P[k + 1], dz0, dZ, 0);
+      mat4_vec(x.P[k + 1], dz0, dZ, 0);
       if (j <= k) {
         mat4_vec(dPk[k + 1], z0, dZ, 1);
         for (int i = 0; i < 4; i++)
@@ -179,6 +212,115 @@ static int oeq_eval(const oeq *q, const double *tau, double z0[4], double *F,
           gv[0] * dZ[0] + gv[1] * dZ[1] + gv[2] * dZ[2] + gv[3] * dZ[3];
     }
   }
+  return SS_OK;
+}
+
+/* The same equations before z0 is eliminated: the n + 4 unknowns
+ * u = (z0, tau), the rows of (5.1) (as B z0 + (q_n, -V)) and the n
+ * duration rows, with their Jacobian ((n + 4) x (n + 4)) when JG is not
+ * NULL.  Where a multiplier of the return map is +1, B is singular (z0 is
+ * then not fixed by tau alone) and F(tau) has a pole on the family, but
+ * this system stays regular. */
+static void full_eval(const oeq *q, const double *u, double *G, double *JG) {
+  const int n = q->n, nu = n + 4;
+  const double *z0 = u, *tau = u + 4;
+  oeq_maps x;
+  double B[16];
+  maps_eval(q, tau, &x);
+  periodicity_matrix(&x, n, B);
+  for (int i = 0; i < 4; i++) {
+    G[i] = i < 3 ? x.qv[n][i] : -q->m->p.V;
+    for (int j = 0; j < 4; j++)
+      G[i] += B[4 * i + j] * z0[j];
+  }
+  duration_rows(q, &x, z0, G + 4);
+  if (!JG)
+    return;
+  memset(JG, 0, sizeof(double) * (size_t)(nu * nu));
+  for (int i = 0; i < 4; i++)
+    for (int j = 0; j < 4; j++)
+      JG[nu * i + j] = B[4 * i + j];
+  JG[nu * 4 + 0] = -q->m->p.chi;
+  JG[nu * 4 + 1] = q->m->p.chi;
+  for (int k = 0; k + 1 < n; k++) {
+    double gv[4];
+    end_grad(q, k, gv);
+    for (int j = 0; j < 4; j++)
+      for (int i = 0; i < 4; i++)
+        JG[nu * (5 + k) + j] += gv[i] * x.P[k + 1][4 * i + j];
+  }
+  for (int j = 0; j < n; j++) {
+    double dPk[MAXP + 1][16], dqk[MAXP + 1][4], dZ[4];
+    maps_deriv(q, &x, j, dPk, dqk);
+    memcpy(dZ, dqk[n], sizeof dZ);
+    mat4_vec(dPk[n], z0, dZ, 1);
+    for (int i = 0; i < 3; i++)
+      JG[nu * i + 4 + j] = dZ[i];
+    for (int k = j; k + 1 < n; k++) {
+      double gv[4];
+      memcpy(dZ, dqk[k + 1], sizeof dZ);
+      mat4_vec(dPk[k + 1], z0, dZ, 1);
+      end_grad(q, k, gv);
+      JG[nu * (5 + k) + 4 + j] =
+          gv[0] * dZ[0] + gv[1] * dZ[1] + gv[2] * dZ[2] + gv[3] * dZ[3];
+    }
+  }
+}
+
+int ss__orbit_solve_full(const ss_model *m, int n, const ss_mode *modes,
+                         double *tau, double z0[4], double *resid) {
+  oeq q;
+  if (oeq_init(&q, m, n, modes))
+    return SS_EINVAL;
+  const int nu = n + 4;
+  const double tolF = RESID_ULPS * DBL_EPSILON * fmax(m->p.V, m->p.ur);
+  double u[MAXP + 4], best[MAXP + 4], G[MAXP + 4];
+  double JG[(MAXP + 4) * (MAXP + 4)], rbest = INFINITY, sprev = INFINITY;
+  int piv[MAXP + 4];
+  memcpy(u, z0, 4 * sizeof *u);
+  memcpy(u + 4, tau, (size_t)n * sizeof *u);
+  /* Newton until the step is a few ulps of the unknowns or, the system
+   * being ill-conditioned near a singular point, stops shrinking at the
+   * level of rounding; the iterate of least residual is kept, and taken
+   * when its residual is within the tolerance of ss_orbit_solve(). */
+  for (int it = 0; it < 30; it++) {
+    double smax = 0, umax = 0, r;
+    full_eval(&q, u, G, JG);
+    if ((r = maxabs(G, nu)) < rbest) {
+      rbest = r;
+      memcpy(best, u, (size_t)nu * sizeof *u);
+    }
+    if (lu_factor(JG, nu, piv, 1e-15))
+      break;
+    for (int i = 0; i < nu; i++)
+      G[i] = -G[i];
+    lu_solve(JG, nu, piv, G);
+    for (int i = 0; i < nu; i++) {
+      u[i] += G[i];
+      smax = fmax(smax, fabs(G[i]));
+      umax = fmax(umax, fabs(u[i]));
+    }
+    if (!isfinite(smax) ||
+        (it >= 3 && smax <= 1e-8 * umax && smax > 0.5 * sprev))
+      break;
+    sprev = smax;
+    if (smax <= 8 * DBL_EPSILON * umax) {
+      full_eval(&q, u, G, NULL);
+      if ((r = maxabs(G, nu)) < rbest) {
+        rbest = r;
+        memcpy(best, u, (size_t)nu * sizeof *u);
+      }
+      break;
+    }
+  }
+  for (int i = 0; i < n; i++)
+    if (!(best[4 + i] > 0))
+      return SS_ENOCONV;
+  if (!(rbest <= 1e3 * tolF))
+    return SS_ENOCONV;
+  memcpy(z0, best, 4 * sizeof *u);
+  memcpy(tau, best + 4, (size_t)n * sizeof *u);
+  *resid = rbest;
   return SS_OK;
 }
 
@@ -224,13 +366,6 @@ static int gfdf(const gsl_vector *x, void *vp, gsl_vector *f, gsl_matrix *J) {
     return GSL_EBADFUNC;
   }
   return GSL_SUCCESS;
-}
-
-static double maxabs(const double *v, int n) {
-  double r = 0;
-  for (int i = 0; i < n; i++)
-    r = fmax(r, fabs(v[i]));
-  return r;
 }
 
 /* Solve the duration equations from tau (in place).  Returns SS_OK with
@@ -469,11 +604,10 @@ static void phase_margins(const ss_model *m, ss_orbit *o, int k, ss_mode mode,
  * slope > 0 is a transversal crossing. */
 static void phase_end_slope(const ss_model *m, ss_orbit *o, int k, ss_mode mode,
                             ss_mode want, const double xs[4], double tau,
-                            double *g_end, double *g_slope) {
-  ss_trig ge;
+                            ss_trig *ge, double *g_end, double *g_slope) {
   double v[2];
-  ss__end_switching(m, mode, want, xs, &ge);
-  ss_trig_eval(&ge, tau, 1, v);
+  ss__end_switching(m, mode, want, xs, ge);
+  ss_trig_eval(ge, tau, 1, v);
   margin_set(&o->transversal, v[1], k, tau);
   *g_end = v[0];
   *g_slope = v[1];
@@ -481,9 +615,10 @@ static void phase_end_slope(const ss_model *m, ss_orbit *o, int k, ss_mode mode,
 
 /* The certified finder: the first event of phase k (started at t0k of the
  * run) must be its end, at the sum of the durations up to it (t_expect),
- * not earlier, and not a tangency. */
+ * not earlier, and not a tangency.  A tangency at the end when the end
+ * rises (@a rises) is SS_GRAZING, for end_by_slope to judge. */
 static int phase_event(ss_orbit *o, ss_sim *sim, int k, double t0k,
-                       double g_end, double t_expect, ss_event *ev,
+                       double g_end, int rises, double t_expect, ss_event *ev,
                        ss_diag *d) {
   double tau = o->durations[k], slack = 1e-7 * (1 + tau);
   ss_mode mode = o->modes[k];
@@ -498,6 +633,8 @@ static int phase_event(ss_orbit *o, ss_sim *sim, int k, double t0k,
   if (rc)
     return ss__fail(d, rc, "phases", tau, "event search failed");
   if (ev->kind == SS_EVENT_GRAZING) {
+    if (rises && fabs(ev->t - t_expect) <= slack * (k + 1))
+      return SS_GRAZING;
     violate(o, SS_MARGIN_GRAZING, 0, k, ev->t - t0k);
     check_fail(d,
                "phase %d (%s) touches its switching surface tangentially at "
@@ -517,6 +654,29 @@ static int phase_event(ss_orbit *o, ss_sim *sim, int k, double t0k,
     return SS_INFEASIBLE;
   }
   return SS_OK;
+}
+
+/* A tangency that the finder reports at the end of phase k, whose
+ * switching function rises there beyond the rounding of its slope
+ * (ss__trig_rises_at): the finder judges a zero by the values of g, and
+ * cannot tell a crossing whose rise above zero, slope^2 / (2 |g''|), is
+ * below their rounding (its tolerance) from a touch.  The orbit's equations
+ * put the zero at the end, to their residual; g rises through it, and the
+ * certified steps before the touch exclude an earlier zero.  So the phase
+ * ends there by a crossing: the run goes on from the end's closed-form
+ * state in the next mode, and @a ev is that event.  (A simulation from the
+ * orbit's start, with only the values, reports the touch and stays in the
+ * mode.) */
+static int end_by_slope(const ss_model *m, ss_sim *sim, ss_mode mode,
+                        ss_mode want, const double xs[4], double tau,
+                        double t_expect, ss_event *ev, ss_diag *d) {
+  ev->t = t_expect;
+  ev->from = mode;
+  ev->to = want;
+  ev->kind = SS_EVENT_TRANSITION;
+  ss_flow(m, mode, tau, xs, ev->x);
+  return ss__sim_init_mode(sim, m, t_expect, ev->x, want, d) == SS_OK ? SS_OK
+                                                                      : SS_EBUG;
 }
 
 /* Falling (or flat) at its end, the switching function was above zero just
@@ -579,12 +739,16 @@ static int check_phase(const ss_model *m, ss_orbit *o, ss_sim *sim, int k,
   double tau = o->durations[k], xs[4], g_end, g_slope;
   ss_mode mode = o->modes[k], want = k + 1 < n ? o->modes[k + 1] : SS_MODE_SLIP;
   ss_event ev;
+  ss_trig ge;
   int rc;
   memcpy(xs, sim->x, sizeof xs);
   phase_margins(m, o, k, mode, want, xs, tau);
-  phase_end_slope(m, o, k, mode, want, xs, tau, &g_end, &g_slope);
-  if ((rc = phase_event(o, sim, k, t0k, g_end, t_expect, &ev, d)) ||
-      (rc = phase_transversal(o, k, g_end, g_slope, d)))
+  phase_end_slope(m, o, k, mode, want, xs, tau, &ge, &g_end, &g_slope);
+  int rises = ss__trig_rises_at(&ge, tau);
+  rc = phase_event(o, sim, k, t0k, g_end, rises, t_expect, &ev, d);
+  if (rc == SS_GRAZING)
+    rc = end_by_slope(m, sim, mode, want, xs, tau, t_expect, &ev, d);
+  if (rc || (rc = phase_transversal(o, k, g_end, g_slope, d)))
     return rc;
   return phase_switching(m, o, k, want, &ev, d);
 }

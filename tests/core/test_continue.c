@@ -640,6 +640,81 @@ static void test_fold(void) {
   ss_branch_free(&b);
 }
 
+/* EVIDENCE: README "Families": a real multiplier crosses +1 where the
+ * family does not turn (the stick-slip family of period 30.6 continued as
+ * /continue does, through ss_continue_study): the saddle-node is located to
+ * 1e-10 where the finite-difference Jacobian of the simulated map has a real
+ * multiplier 1, not left at an orbit of complex multipliers (before: eta =
+ * 0.32313454920, multipliers 0.98785 +- 0.09338i, "not located"), in
+ * eta at the value an independent solver gives, 0.3235446; likewise in chi
+ * (before: 5.4e-5 off, "not located") */
+static void test_saddle_node_without_fold(void) {
+  const ss_params p = {0.5668, 0.3432, 0.2466, 3.1875, 1};
+  const struct {
+    ss_param_id id;
+    double lo, hi, near, tol;
+  } cases[] = {{SS_PARAM_ETA, 0.05, 3, 0.3235446, 1e-6},
+               {SS_PARAM_CHI, 0.01, 0.99, NAN, 0}};
+  ss_orbit start;
+  memset(&start, 0, sizeof start);
+  start.n_phases = 2;
+  start.modes[0] = SS_MODE_SLIP;
+  start.modes[1] = SS_MODE_STICK;
+  start.durations[0] = 14.77787;
+  start.durations[1] = 15.85481;
+  for (int c = 0; c < 2; c++) {
+    ss_study_opts so;
+    ss_study st;
+    memset(&so, 0, sizeof so);
+    so.family.param = cases[c].id;
+    so.family.lo = cases[c].lo;
+    so.family.hi = cases[c].hi;
+    ASSERT_EQ_INT(ss_continue_study(&p, &start, &so, &st, NULL), SS_OK);
+    const ss_special *sn = NULL;
+    int n_sn = 0;
+    for (int i = 0; i < st.family.n_special; i++)
+      if (st.family.special[i].kind == SS_SPECIAL_SADDLE_NODE) {
+        sn = &st.family.special[i];
+        n_sn++;
+      }
+    ASSERT_EQ_INT(n_sn, 1);
+    if (!sn) {
+      ss_study_free(&st);
+      continue;
+    }
+    ss_params at = p;
+    *param(&at, cases[c].id) = sn->value;
+    ss_model m;
+    ss_stab_opts fo = {sn->at.n_turns, 1};
+    ss_stab fd;
+    ASSERT_EQ_INT(ss_model_init(&m, &at, NULL), SS_OK);
+    ASSERT_EQ_INT(ss_stability(&m, st.family.n_phases, st.family.modes,
+                               sn->at.durations, sn->at.z0, &fo, &fd),
+                  SS_OK);
+    /* det(I - J) of the finite-difference Jacobian: with two multipliers
+     * near 1 each is sensitive to the differences' error, their product
+     * with the other's distance from 1 much less */
+    const double(*J)[2] = fd.jac_fd;
+    double re[2], im[2],
+        psi = (1 - J[0][0]) * (1 - J[1][1]) - J[0][1] * J[1][0];
+    eig2(fd.jac_fd, re, im);
+    double off_an =
+        fmin(fabs(sn->at.eig_re[0] - 1), fabs(sn->at.eig_re[1] - 1));
+    printf("saddle-node without a fold in %s at %.12g (precision %.2g): "
+           "multipliers %.12g, %.12g (finite differences %.9g, %.9g, "
+           "det(I - J) %.2g)\n",
+           ss_param_name(cases[c].id), sn->value, sn->precision,
+           sn->at.eig_re[0], sn->at.eig_re[1], re[0], re[1], psi);
+    ASSERT_TRUE(sn->precision <= 1e-10);
+    ASSERT_TRUE(strstr(sn->detail, "not located") == NULL);
+    if (!isnan(cases[c].near))
+      ASSERT_NEAR(sn->value, cases[c].near, cases[c].tol);
+    ASSERT_TRUE(sn->at.eig_im[0] == 0 && off_an < 1e-7);
+    ASSERT_TRUE(im[0] == 0 && fabs(psi) < 5e-8);
+    ss_study_free(&st);
+  }
+}
+
 /* EVIDENCE: README "Families": a period doubling followed in a second
  * parameter: at every point of the curve the orbit is feasible and the
  * finite-difference Jacobian of the simulated map has a multiplier -1 */
@@ -1116,6 +1191,81 @@ static void test_transversality_curve(void) {
     ss_branch_free(&b);
   }
   ASSERT_EQ_INT(seen, 1);
+}
+
+/* EVIDENCE: README "Families": a phase that ends tangentially: orbits
+ * whose stick ends with a slope too small for the event finder to tell
+ * the crossing from a touch by the values (the band, 3e-7 to 1e-8 below
+ * the end here) are accepted by the slope, judged against its own rounding
+ * bound: the family (the README's, at its rounded parameters) is feasible
+ * to within 1e-9 of its end at ur = 4.407438357428859 (the value an
+ * independent solver gives), and at 1e-7 below it the search returns the
+ * orbit and its certificate counts it (before: rejected as grazing,
+ * certificate complete without it); the rk8pd reference gives a rising end */
+static void test_tangency_band(void) {
+  const ss_params p = {0.4572, 0.9573, 0.2514, 3.9804, 1};
+  const double end = 4.407438357428859;
+  ss_model m;
+  ss_orbit_opts oo;
+  ss_orbit found[16], *start = NULL;
+  int n = 0;
+  memset(&oo, 0, sizeof oo);
+  oo.kinds = SS_ORBIT_STICKSLIP;
+  ASSERT_EQ_INT(ss_model_init(&m, &p, NULL), SS_OK);
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, found, 16, &n, NULL, NULL), SS_OK);
+  for (int i = 0; i < n; i++)
+    if (found[i].n_phases == 2 && found[i].period > 5 && found[i].period < 6)
+      start = &found[i];
+  ASSERT_TRUE(start != NULL);
+  if (!start)
+    return;
+  ss_cont_opts co;
+  memset(&co, 0, sizeof co);
+  co.param = SS_PARAM_UR;
+  co.lo = 0.3 * p.ur;
+  co.hi = 3 * p.ur;
+  ss_branch b;
+  ASSERT_EQ_INT(ss_continue(&p, start, &co, &b, NULL), SS_OK);
+  const ss_special *g = NULL;
+  for (int i = 0; i < b.n_special; i++)
+    if (b.special[i].margin == SS_MARGIN_TRANSVERSALITY)
+      g = &b.special[i];
+  ASSERT_TRUE(g != NULL);
+  double last = g ? fabs(g->value - g->at.value) / end : NAN,
+         located = g ? g->value : NAN;
+  if (g) {
+    ASSERT_NEAR_REL(g->value, end, 1e-12);
+    ASSERT_TRUE(last < 1e-9);
+  }
+  ss_branch_free(&b);
+  /* 1e-7 below the end: found, certified, and rising at its end */
+  ss_params q = p;
+  q.ur = end * (1 - 1e-7);
+  ss_orbit_report rep;
+  const ss_orbit *o = NULL;
+  memset(&rep, 0, sizeof rep);
+  oo.certify = 1;
+  oo.max_period = 1;
+  ASSERT_EQ_INT(ss_model_init(&m, &q, NULL), SS_OK);
+  ASSERT_EQ_INT(ss_orbit_find(&m, &oo, found, 16, &n, &rep, NULL), SS_OK);
+  for (int i = 0; i < n; i++)
+    if (found[i].n_phases == 2 && fabs(found[i].period - 6.0036) < 1e-3)
+      o = &found[i];
+  ASSERT_TRUE(o != NULL);
+  ASSERT_TRUE(rep.cert[0].ran && rep.cert[0].complete);
+  ASSERT_EQ_INT(rep.cert[0].rejected, 0);
+  ASSERT_EQ_INT(rep.cert[0].orbits, rep.cert[0].roots);
+  if (!o)
+    return;
+  double sl = ref_stick_end_slope(&q, o->modes, o->durations, o->x0, 1);
+  printf("the tangency band: the family's last feasible point %.1e below "
+         "its end at ur = %.15g; 1e-7 below it the orbit of period %.9g is "
+         "returned (end slope %.3g, rk8pd %.3g, residual %.1e), certified "
+         "with %d roots, %d orbits, %d rejected\n",
+         last, located, o->period, o->transversal.value, sl, o->residual,
+         rep.cert[0].roots, rep.cert[0].orbits, rep.cert[0].rejected);
+  ASSERT_TRUE(o->transversal.value > 1e-7 && o->residual < 1e-13);
+  ASSERT_TRUE(sl > 1e-7);
 }
 
 /* The bits of two doubles are the same (a NaN equals itself). */
@@ -1681,10 +1831,12 @@ int main(void) {
   test_beyond();
   test_neimark_sacker();
   test_fold();
+  test_saddle_node_without_fold();
   test_period_doubling_curve();
   test_physical();
   test_interior_grazing_curve();
   test_transversality_curve();
+  test_tangency_band();
   test_study();
   test_study_options();
   TEST_DONE();
