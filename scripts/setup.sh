@@ -35,7 +35,8 @@ lint_tools() {
     (cd api/lint && npm ci --no-audit --no-fund --ignore-scripts --loglevel=error)
   fi
   if [ "${1:-}" = --test ] && command -v npm >/dev/null &&
-    [ ! -d tests/browser/node_modules/puppeteer-core ]; then
+    { [ ! -d tests/browser/node_modules/puppeteer-core ] ||
+      [ ! -d tests/browser/node_modules/axe-core ]; }; then
     (cd tests/browser && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund \
       --ignore-scripts --loglevel=error)
   fi
