@@ -12,6 +12,8 @@
 #                     tests/browser), and the generated client's test (the
 #                     pinned openapi-typescript and typescript of
 #                     tests/typescript); those from the npm registry;
+#                     python3-matplotlib for the README's figures
+#                     (scripts/figures.py);
 #                     without them those tests are skipped, so as another
 #                     user their absence is only said
 set -euo pipefail
@@ -20,6 +22,7 @@ pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-d
 extras=()
 if [ "${1:-}" = --test ]; then
   extras=(prometheus nginx python3 python3-jsonschema systemd chromium)
+  extras+=(python3-matplotlib)
   command -v npm >/dev/null || extras+=(nodejs npm)
 fi
 cd "$(dirname "$0")/.."
