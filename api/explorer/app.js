@@ -15,8 +15,9 @@
 
 const API = new URLSearchParams(location.search).get("api") || "";
 const DASH = { overshoot: "", stick: "7 4", slip: "1.5 3" };
-const COLORS = ["#1f5fa8", "#c2410c", "#15803d", "#7e22ce", "#b91c1c",
-                "#0e7490", "#a16207", "#be185d"];
+/* orbit colours, told apart in print (Tableau's ten, less the grey and olive) */
+const COLORS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                "#8c564b", "#e377c2", "#17becf"];
 const PARAMS = {
   dimensionless: ["chi", "eta", "us", "ur", "V"],
   physical: ["m1", "m2", "k1", "k2", "Fs", "Fr", "v0"],
@@ -345,11 +346,8 @@ async function findOrbits(view) {
       return;
     }
     const s = first.orbits.map((o) => o.samples);
-    state.whole = {
-      r2: [Plot.extent(s.map((q) => q.x2)), Plot.extent(s.map((q) => q.v2))],
-      r1: [Plot.extent(s.map((q) => q.x1)), Plot.extent(s.map((q) => q.v1))],
-    };
-    framePortraits(state.whole.r1, state.whole.r2, false);
+    framePortraits([Plot.extent(s.map((q) => q.x1)), Plot.extent(s.map((q) => q.v1))],
+                   [Plot.extent(s.map((q) => q.x2)), Plot.extent(s.map((q) => q.v2))], false);
     const { r1, r2 } = state.frames;
     /* half a pixel in both portraits */
     body.samples = {
@@ -391,6 +389,9 @@ function framePortraits(w1, w2, exact) {
     xname: "x" + n, yname: "x" + n + "'",
   });
   state.frames = { r1: mk("portrait1", w1, 1), r2: mk("portrait2", w2, 2) };
+  if (!exact)
+    state.home = { r1: [state.frames.r1.xr, state.frames.r1.yr],
+                   r2: [state.frames.r2.xr, state.frames.r2.yr] };
 }
 
 function selectOrbit(i) {
@@ -507,7 +508,7 @@ function drawOrbits() {
                                     yname: "x" + n + "'" });
       state.frames = n === 1 ? { r1: q, r2: keep.r2 } : { r1: keep.r1, r2: q };
       drawOrbits();
-    }, state.whole["r" + n]);
+    }, state.home["r" + n]);
     state.figures["portrait" + n] = () => orbitTable(["t", "x" + n, "v" + n, "mode"]);
   }
   drawConstraints();

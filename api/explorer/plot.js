@@ -226,6 +226,7 @@ const Plot = (() => {
     copy.setAttribute("width", svg.dataset.width);
     copy.setAttribute("height", svg.dataset.height);
     copy.removeAttribute("class");
+    copy.removeAttribute("style");
     for (const r of copy.querySelectorAll(".readout"))
       r.remove();
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + new XMLSerializer().serializeToString(copy);

@@ -52,7 +52,10 @@ try {
   page.on("response", (r) => r.status() >= 400 && problems.push(r.status() + " " + r.url()));
   const downloads = fs.mkdtempSync(path.join(out, "downloads-"));
   const cdp = await browser.target().createCDPSession();
-  await cdp.send("Browser.setDownloadBehavior", { behavior: "allow", downloadPath: downloads });
+  await cdp.send("Browser.setDownloadBehavior", { behavior: "allow", downloadPath: downloads,
+                                                  eventsEnabled: true });
+  const ended = [];
+  cdp.on("Browser.downloadProgress", (e) => e.state !== "inProgress" && ended.push(e.state));
   const text = (sel) => page.$eval(sel, (e) => e.textContent);
   const shown = (sel) => page.$eval(sel, (e) => (e.hidden ? "" : e.textContent));
   const rowsOf = () => page.$$eval("#orbits tbody tr", (trs) =>
@@ -148,6 +151,19 @@ try {
   await page.waitForFunction(() => /6 of 6 pieces/.test(document.getElementById("status").textContent) ||
                                    !document.getElementById("error").hidden, { timeout: 60000 });
   check(/simulating from/.test(await text("#status")), "a click in a portrait simulates from there");
+  // the wheel zooms a portrait about the pointer, a double click returns
+  const ticks = () => page.$$eval("#portrait2 .axes text", (ts) => ts.map((t) => t.textContent).join(" "));
+  const whole = await ticks();
+  await page.mouse.move(box.x + box.width * 0.4, box.y + box.height * 0.5);
+  await page.mouse.wheel({ deltaY: -300 });
+  await page.waitForFunction((w) => [...document.querySelectorAll("#portrait2 .axes text")]
+    .map((t) => t.textContent).join(" ") !== w, { timeout: 5000 }, whole).catch(() => {});
+  const zoomed = await ticks();
+  await page.mouse.click(box.x + box.width * 0.4, box.y + box.height * 0.5, { clickCount: 2 });
+  await page.waitForFunction(() => /6 of 6 pieces/.test(document.getElementById("status").textContent),
+                             { timeout: 60000 });
+  check(zoomed !== whole && (await ticks()) === whole,
+        "the wheel zooms the portrait (ticks " + zoomed.slice(0, 30) + "), a double click returns");
   await page.screenshot({ path: out + "/explorer.png" });
 
   // the family, its grazing labelled inside the figure
@@ -192,12 +208,8 @@ try {
 
   // 3. every figure's exports
   const files = async (n) => {
-    for (let k = 0; k < 100; k++) {
-      const f = fs.readdirSync(downloads).filter((x) => !x.endsWith(".crdownload"));
-      if (f.length >= n)
-        return f;
+    for (let k = 0; k < 100 && ended.length < n; k++)
       await new Promise((r) => setTimeout(r, 50));
-    }
     return fs.readdirSync(downloads);
   };
   const figures = await page.$$eval("figure[data-name]", (fs) => fs.map((f) => f.dataset.name).filter((n) => n !== "basins"));
@@ -206,8 +218,11 @@ try {
     for (const fmt of ["svg", "png", "csv", "json"]) {
       await page.click("figure[data-name='" + name + "'] .export-" + fmt);
       got = await files(++count);
+      // Chrome drops, at times, a download started right after another
+      await new Promise((r) => setTimeout(r, 250));
     }
-  check(got.length === count, "each figure exports SVG, PNG, CSV and JSON: " + got.length + " of " + count);
+  check(got.length === count && ended.every((e) => e === "completed"),
+        "each figure exports SVG, PNG, CSV and JSON: " + got.length + " of " + count + " (" + ended + ")");
   const read = (n) => (fs.existsSync(path.join(downloads, n)) ? fs.readFileSync(path.join(downloads, n)) : Buffer.from(""));
   const parses = await page.evaluate((texts) => texts.map((t) => {
     const d = new DOMParser().parseFromString(t, "image/svg+xml");
@@ -293,8 +308,8 @@ try {
   check(dopts.includes("V"), "the dimensionless family offers V: " + dopts);
 
   // 5. long work as jobs: a 100x100 map cancelled, another finished
-  await page.goto(base + "/?" + q + "&m.xn=100&m.yn=100&m.kind=overshoot", { waitUntil: "networkidle0" });
-  await page.waitForFunction(() => document.querySelectorAll("#orbits tbody tr").length > 0, { timeout: 30000 });
+  await page.goto(base + "/?" + q + "&open=family&m.xn=100&m.yn=100&m.kind=overshoot", { waitUntil: "networkidle0" });
+  await page.waitForFunction(() => document.querySelectorAll("#family line.branch").length > 0, { timeout: 60000 });
   await page.click("#map-form button[type=submit]");
   await page.waitForFunction(() => /job: .* of 10000 done/.test(document.querySelector("#map-panel .status").textContent),
                              { timeout: 20000 });
