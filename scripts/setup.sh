@@ -11,17 +11,19 @@
 #                     test (chromium, driven by the pinned puppeteer-core of
 #                     tests/browser), and the generated client's test (the
 #                     pinned openapi-typescript and typescript of
-#                     tests/typescript); those from the npm registry;
+#                     tests/typescript), those from the npm registry;
+#                     and PostgreSQL's server, for a throwaway cluster
+#                     the job store's tests run on (pg-throwaway.sh);
 #                     python3-matplotlib for the README's figures
 #                     (scripts/figures.py);
 #                     without them those tests are skipped, so as another
 #                     user their absence is only said
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-dev
-  zlib1g-dev)
+  zlib1g-dev libsqlite3-dev libpq-dev)
 extras=()
 if [ "${1:-}" = --test ]; then
-  extras=(prometheus nginx python3 python3-jsonschema systemd chromium)
+  extras=(prometheus nginx python3 python3-jsonschema systemd chromium postgresql)
   extras+=(python3-matplotlib)
   command -v npm >/dev/null || extras+=(nodejs npm)
 fi

@@ -54,7 +54,7 @@ typedef struct store_job {
   long chunks, chunks_done;
   long items, items_done; /**< the units progress is told in (cells,
                                batch items; 1 for a single answer) */
-  char message[256]; /**< a failed job's reason, else "" */
+  char message[256];      /**< a failed job's reason, else "" */
 } store_job;
 
 /** One chunk of a job as it is submitted. */
@@ -121,8 +121,7 @@ int store_fail(store *s, const char *id, const char *message, int status,
                const char *problem, size_t len, double now);
 /** Chunk @a chunk's result (malloc'd) into *buf: 0; STORE_NONE when it is
  *  not stored (yet); STORE_ERROR. */
-int store_result(store *s, const char *id, long chunk, char **buf,
-                 size_t *len);
+int store_result(store *s, const char *id, long chunk, char **buf, size_t *len);
 /** A failed job's problem: its HTTP status and body (malloc'd): 0,
  *  STORE_NONE, STORE_ERROR. */
 int store_problem(store *s, const char *id, int *status, char **body,

@@ -1,0 +1,687 @@
+/*
+ * store_sqlite.c: the job store in one SQLite file (WAL), the embedded
+ * default.
+ *
+ * One connection per store, used under a mutex: every call is a few
+ * statements, so threads of one daemon wait little.  Daemons on one host
+ * may share the file: writes take the database's write lock at their start
+ * (BEGIN IMMEDIATE), so a claim reads and marks its chunk in one step, and
+ * a busy lock is waited for (busy_timeout) rather than failed.
+ *
+ * The path is watched: a file deleted or replaced under a running daemon
+ * would take its writes into an unlinked inode and lose them, so every call
+ * first checks that the path still names the file that was opened, and
+ * fails (STORE_ERROR) when it does not.  "sqlite:PATH?mode=ro" opens the
+ * file read-only (every write then fails), as a store on a read-only
+ * mount would.
+ */
+#include <errno.h>
+#include <pthread.h>
+#include <sqlite3.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+
+#include "store_impl.h"
+
+typedef struct lite {
+  sqlite3 *db;
+  pthread_mutex_t lock;
+  char path[4096];
+  dev_t dev;
+  ino_t ino;
+} lite;
+
+#define SCHEMA_VERSION "1"
+
+/* The jobs' n orders them (newest first in a list, oldest first for
+ * claims); a chunk's result is stored compressed when packed is 1. */
+static const char SCHEMA[] =
+    "CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value TEXT);"
+    "CREATE TABLE IF NOT EXISTS jobs("
+    " n INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE,"
+    " path TEXT NOT NULL, status INTEGER NOT NULL,"
+    " created REAL NOT NULL, started REAL NOT NULL DEFAULT 0,"
+    " updated REAL NOT NULL, finished REAL NOT NULL DEFAULT 0,"
+    " chunks INTEGER NOT NULL, chunks_done INTEGER NOT NULL DEFAULT 0,"
+    " items INTEGER NOT NULL, items_done INTEGER NOT NULL DEFAULT 0,"
+    " message TEXT NOT NULL DEFAULT '', body BLOB,"
+    " problem_status INTEGER NOT NULL DEFAULT 0, problem BLOB);"
+    "CREATE INDEX IF NOT EXISTS jobs_active ON jobs(status, n);"
+    "CREATE TABLE IF NOT EXISTS chunks("
+    " job INTEGER NOT NULL REFERENCES jobs(n) ON DELETE CASCADE,"
+    " k INTEGER NOT NULL, stage INTEGER NOT NULL, items INTEGER NOT NULL,"
+    " done INTEGER NOT NULL DEFAULT 0, owner TEXT, lease REAL,"
+    " packed INTEGER NOT NULL DEFAULT 0, result BLOB,"
+    " PRIMARY KEY(job, k)) WITHOUT ROWID;"
+    "CREATE INDEX IF NOT EXISTS chunks_open ON chunks(job, done, stage);"
+    "INSERT OR IGNORE INTO meta VALUES('schema', '" SCHEMA_VERSION "');";
+
+static int fail_db(lite *l, const char *what) {
+  return store__fail("sqlite store %s: %s: %s", l->path, what,
+                     sqlite3_errmsg(l->db));
+}
+
+/* Whether the path still names the file opened: 0, or STORE_ERROR. */
+static int watch(lite *l) {
+  struct stat st;
+  if (stat(l->path, &st) != 0)
+    return store__fail("sqlite store %s: %s (was it deleted?)", l->path,
+                       strerror(errno));
+  if (st.st_dev != l->dev || st.st_ino != l->ino)
+    return store__fail("sqlite store %s: the file was replaced by another",
+                       l->path);
+  return 0;
+}
+
+static int enter(lite *l) {
+  pthread_mutex_lock(&l->lock);
+  int rc = watch(l);
+  if (rc)
+    pthread_mutex_unlock(&l->lock);
+  return rc;
+}
+
+static void leave(lite *l) { pthread_mutex_unlock(&l->lock); }
+
+static int exec(lite *l, const char *sql) {
+  char *msg = NULL;
+  if (sqlite3_exec(l->db, sql, NULL, NULL, &msg) != SQLITE_OK) {
+    store__fail("sqlite store %s: %s", l->path,
+                msg ? msg : sqlite3_errmsg(l->db));
+    sqlite3_free(msg);
+    return STORE_ERROR;
+  }
+  return 0;
+}
+
+static int begin(lite *l) { return exec(l, "BEGIN IMMEDIATE"); }
+
+static int commit(lite *l) {
+  if (exec(l, "COMMIT")) {
+    sqlite3_exec(l->db, "ROLLBACK", NULL, NULL, NULL);
+    return STORE_ERROR;
+  }
+  return 0;
+}
+
+static int rollback(lite *l, int rc) {
+  sqlite3_exec(l->db, "ROLLBACK", NULL, NULL, NULL);
+  return rc;
+}
+
+static sqlite3_stmt *prep(lite *l, const char *sql) {
+  sqlite3_stmt *st = NULL;
+  if (sqlite3_prepare_v2(l->db, sql, -1, &st, NULL) != SQLITE_OK) {
+    fail_db(l, "prepare");
+    return NULL;
+  }
+  return st;
+}
+
+/* Step @a st to its end (a statement that returns no row): 0 or
+ * STORE_ERROR; finalizes it. */
+static int run(lite *l, sqlite3_stmt *st) {
+  int rc = sqlite3_step(st);
+  sqlite3_finalize(st);
+  return rc == SQLITE_DONE ? 0 : fail_db(l, "write");
+}
+
+int store__sqlite_open(const char *where, void **b, char *why, size_t n) {
+  *b = NULL;
+  lite *l = calloc(1, sizeof *l);
+  if (!l) {
+    snprintf(why, n, "out of memory");
+    return STORE_ERROR;
+  }
+  const char *q = strchr(where, '?');
+  size_t plen = q ? (size_t)(q - where) : strlen(where);
+  int ro = q && strstr(q, "mode=ro");
+  if (plen == 0 || plen >= sizeof l->path) {
+    snprintf(why, n, "sqlite store: no path, or a path too long");
+    free(l);
+    return STORE_ERROR;
+  }
+  memcpy(l->path, where, plen);
+  int flags =
+      ro ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
+  /* its directory, when missing (one level: a state directory) */
+  char dir[sizeof l->path];
+  memcpy(dir, l->path, sizeof dir);
+  char *slash = strrchr(dir, '/');
+  if (!ro && slash && slash != dir) {
+    *slash = 0;
+    mkdir(dir, 0750);
+  }
+  if (sqlite3_open_v2(l->path, &l->db, flags | SQLITE_OPEN_FULLMUTEX, NULL) !=
+      SQLITE_OK) {
+    snprintf(why, n, "sqlite store %s: %s", l->path,
+             l->db ? sqlite3_errmsg(l->db) : "out of memory");
+    sqlite3_close(l->db);
+    free(l);
+    return STORE_ERROR;
+  }
+  sqlite3_busy_timeout(l->db, 5000);
+  pthread_mutex_init(&l->lock, NULL);
+  int rc = exec(l, "PRAGMA foreign_keys=ON");
+  if (!rc && !ro)
+    rc = exec(l, "PRAGMA journal_mode=WAL;PRAGMA synchronous=NORMAL;");
+  if (!rc && !ro)
+    rc = exec(l, SCHEMA);
+  if (!rc) {
+    /* a file of another schema is not ours to write */
+    sqlite3_stmt *st = prep(l, "SELECT value FROM meta WHERE key='schema'");
+    rc = st ? 0 : STORE_ERROR;
+    if (st &&
+        (sqlite3_step(st) != SQLITE_ROW ||
+         strcmp((const char *)sqlite3_column_text(st, 0), SCHEMA_VERSION) != 0))
+      rc = store__fail("sqlite store %s: not a job store of schema %s", l->path,
+                       SCHEMA_VERSION);
+    sqlite3_finalize(st);
+  }
+  struct stat sb;
+  if (!rc && stat(l->path, &sb) != 0)
+    rc = store__fail("sqlite store %s: %s", l->path, strerror(errno));
+  if (rc) {
+    snprintf(why, n, "%s", store_error(NULL));
+    sqlite3_close(l->db);
+    pthread_mutex_destroy(&l->lock);
+    free(l);
+    return STORE_ERROR;
+  }
+  l->dev = sb.st_dev;
+  l->ino = sb.st_ino;
+  *b = l;
+  return 0;
+}
+
+static void lite_close(void *b) {
+  lite *l = b;
+  if (!l)
+    return;
+  sqlite3_close(l->db);
+  pthread_mutex_destroy(&l->lock);
+  free(l);
+}
+
+static int lite_submit(void *b, const store_job *j, const char *body,
+                       size_t len, const store_chunk *chunks, size_t n) {
+  lite *l = b;
+  long items = 0;
+  for (size_t k = 0; k < n; k++)
+    items += chunks[k].items;
+  if (enter(l))
+    return STORE_ERROR;
+  int rc = begin(l);
+  sqlite3_stmt *st = rc ? NULL
+                        : prep(l, "INSERT INTO jobs(id, path, status, "
+                                  "created, updated, chunks, items, body) "
+                                  "VALUES(?, ?, 0, ?, ?, ?, ?, ?)");
+  if (!rc && st) {
+    sqlite3_bind_text(st, 1, j->id, -1, SQLITE_STATIC);
+    sqlite3_bind_text(st, 2, j->path, -1, SQLITE_STATIC);
+    sqlite3_bind_double(st, 3, j->created);
+    sqlite3_bind_double(st, 4, j->created);
+    sqlite3_bind_int64(st, 5, (sqlite3_int64)n);
+    sqlite3_bind_int64(st, 6, items);
+    sqlite3_bind_blob64(st, 7, body, len, SQLITE_STATIC);
+    rc = run(l, st);
+  } else if (!rc) {
+    rc = STORE_ERROR;
+  }
+  sqlite3_int64 job = sqlite3_last_insert_rowid(l->db);
+  st = rc ? NULL
+          : prep(l, "INSERT INTO chunks(job, k, stage, items) "
+                    "VALUES(?, ?, ?, ?)");
+  if (!rc && !st)
+    rc = STORE_ERROR;
+  for (size_t k = 0; !rc && k < n; k++) {
+    sqlite3_bind_int64(st, 1, job);
+    sqlite3_bind_int64(st, 2, (sqlite3_int64)k);
+    sqlite3_bind_int(st, 3, chunks[k].stage);
+    sqlite3_bind_int64(st, 4, chunks[k].items);
+    if (sqlite3_step(st) != SQLITE_DONE)
+      rc = fail_db(l, "submit");
+    sqlite3_reset(st);
+  }
+  sqlite3_finalize(st);
+  rc = rc ? rollback(l, rc) : commit(l);
+  leave(l);
+  return rc;
+}
+
+#define JOB_COLUMNS                                                            \
+  "id, path, status, created, started, updated, finished, chunks, "            \
+  "chunks_done, items, items_done, message"
+
+static void read_job(sqlite3_stmt *st, store_job *o) {
+  memset(o, 0, sizeof *o);
+  snprintf(o->id, sizeof o->id, "%s", (const char *)sqlite3_column_text(st, 0));
+  snprintf(o->path, sizeof o->path, "%s",
+           (const char *)sqlite3_column_text(st, 1));
+  o->status = (store_status)sqlite3_column_int(st, 2);
+  o->created = sqlite3_column_double(st, 3);
+  o->started = sqlite3_column_double(st, 4);
+  o->updated = sqlite3_column_double(st, 5);
+  o->finished = sqlite3_column_double(st, 6);
+  o->chunks = (long)sqlite3_column_int64(st, 7);
+  o->chunks_done = (long)sqlite3_column_int64(st, 8);
+  o->items = (long)sqlite3_column_int64(st, 9);
+  o->items_done = (long)sqlite3_column_int64(st, 10);
+  snprintf(o->message, sizeof o->message, "%s",
+           (const char *)sqlite3_column_text(st, 11));
+}
+
+static int lite_get(void *b, const char *id, store_job *out) {
+  lite *l = b;
+  if (enter(l))
+    return STORE_ERROR;
+  sqlite3_stmt *st = prep(l, "SELECT " JOB_COLUMNS " FROM jobs WHERE id = ?");
+  int rc = st ? STORE_NONE : STORE_ERROR;
+  if (st) {
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    int s = sqlite3_step(st);
+    if (s == SQLITE_ROW) {
+      read_job(st, out);
+      rc = 0;
+    } else if (s != SQLITE_DONE) {
+      rc = fail_db(l, "read a job");
+    }
+  }
+  sqlite3_finalize(st);
+  leave(l);
+  return rc;
+}
+
+/* The blob of the one row @a st gives, column @a col, into a malloc'd
+ * NUL-terminated copy: 0, STORE_NONE (no row, or a NULL blob),
+ * STORE_ERROR.  *extra: column col + 1 as an int, when non-NULL. */
+static int read_blob(lite *l, sqlite3_stmt *st, int col, char **buf,
+                     size_t *len, int *extra) {
+  int s = sqlite3_step(st);
+  if (s == SQLITE_DONE)
+    return STORE_NONE;
+  if (s != SQLITE_ROW)
+    return fail_db(l, "read");
+  if (sqlite3_column_type(st, col) == SQLITE_NULL)
+    return STORE_NONE;
+  size_t n = (size_t)sqlite3_column_bytes(st, col);
+  const void *p = sqlite3_column_blob(st, col);
+  char *out = malloc(n + 1);
+  if (!out)
+    return store__fail("out of memory reading %zu bytes", n);
+  if (n)
+    memcpy(out, p, n);
+  out[n] = 0;
+  *buf = out;
+  *len = n;
+  if (extra)
+    *extra = sqlite3_column_int(st, col + 1);
+  return 0;
+}
+
+static int lite_body(void *b, const char *id, char **body, size_t *len) {
+  lite *l = b;
+  if (enter(l))
+    return STORE_ERROR;
+  sqlite3_stmt *st = prep(l, "SELECT body FROM jobs WHERE id = ?");
+  int rc = STORE_ERROR;
+  if (st) {
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    rc = read_blob(l, st, 0, body, len, NULL);
+  }
+  sqlite3_finalize(st);
+  leave(l);
+  return rc;
+}
+
+static int lite_list(void *b, long offset, size_t max, store_job *out,
+                     size_t *n, long *total) {
+  lite *l = b;
+  *n = 0;
+  *total = 0;
+  if (enter(l))
+    return STORE_ERROR;
+  sqlite3_stmt *st = prep(l, "SELECT count(*) FROM jobs");
+  int rc = st ? 0 : STORE_ERROR;
+  if (st && sqlite3_step(st) == SQLITE_ROW)
+    *total = (long)sqlite3_column_int64(st, 0);
+  else if (st)
+    rc = fail_db(l, "count jobs");
+  sqlite3_finalize(st);
+  st = rc ? NULL
+          : prep(l, "SELECT " JOB_COLUMNS
+                    " FROM jobs ORDER BY n DESC LIMIT ? OFFSET ?");
+  if (!rc && !st)
+    rc = STORE_ERROR;
+  if (st) {
+    sqlite3_bind_int64(st, 1, (sqlite3_int64)max);
+    sqlite3_bind_int64(st, 2, offset);
+    int s;
+    while (*n < max && (s = sqlite3_step(st)) == SQLITE_ROW)
+      read_job(st, &out[(*n)++]);
+    if (*n < max && s != SQLITE_DONE)
+      rc = fail_db(l, "list jobs");
+  }
+  sqlite3_finalize(st);
+  leave(l);
+  return rc;
+}
+
+/* A chunk is claimable when its job is accepted or running, it is not
+ * stored, unleased or its lease has ended, and no chunk of an earlier
+ * stage of its job is unstored. */
+static int lite_claim(void *b, const char *owner, double now, double lease,
+                      char id[STORE_ID_LEN + 1], long *chunk) {
+  lite *l = b;
+  if (enter(l))
+    return STORE_ERROR;
+  int rc = begin(l);
+  sqlite3_stmt *st =
+      rc ? NULL
+         : prep(l, "SELECT j.n, j.id, c.k FROM jobs j JOIN chunks c "
+                   "ON c.job = j.n WHERE j.status IN (0, 1) AND c.done = 0 "
+                   "AND (c.owner IS NULL OR c.lease < ?) AND NOT EXISTS "
+                   "(SELECT 1 FROM chunks e WHERE e.job = j.n AND e.done = 0 "
+                   "AND e.stage < c.stage) ORDER BY j.n, c.k LIMIT 1");
+  if (!rc && !st)
+    rc = STORE_ERROR;
+  sqlite3_int64 job = 0, k = 0;
+  if (!rc) {
+    sqlite3_bind_double(st, 1, now);
+    int s = sqlite3_step(st);
+    if (s == SQLITE_ROW) {
+      job = sqlite3_column_int64(st, 0);
+      snprintf(id, STORE_ID_LEN + 1, "%s",
+               (const char *)sqlite3_column_text(st, 1));
+      k = sqlite3_column_int64(st, 2);
+    } else {
+      rc = s == SQLITE_DONE ? STORE_NONE : fail_db(l, "claim");
+    }
+  }
+  sqlite3_finalize(st);
+  if (!rc) {
+    st = prep(l, "UPDATE chunks SET owner = ?, lease = ? "
+                 "WHERE job = ? AND k = ?");
+    if (!st) {
+      rc = STORE_ERROR;
+    } else {
+      sqlite3_bind_text(st, 1, owner, -1, SQLITE_STATIC);
+      sqlite3_bind_double(st, 2, now + lease);
+      sqlite3_bind_int64(st, 3, job);
+      sqlite3_bind_int64(st, 4, k);
+      rc = run(l, st);
+    }
+  }
+  if (!rc) {
+    st = prep(l, "UPDATE jobs SET status = 1, updated = ?1, started = "
+                 "CASE WHEN started = 0 THEN ?1 ELSE started END "
+                 "WHERE n = ?2 AND status = 0");
+    if (!st) {
+      rc = STORE_ERROR;
+    } else {
+      sqlite3_bind_double(st, 1, now);
+      sqlite3_bind_int64(st, 2, job);
+      rc = run(l, st);
+    }
+  }
+  if (!rc)
+    *chunk = (long)k;
+  rc = rc ? rollback(l, rc) : commit(l);
+  leave(l);
+  return rc;
+}
+
+/* The chunk (job id, k) held by owner, not stored, of a job accepted or
+ * running. */
+#define HELD                                                                   \
+  "job = (SELECT n FROM jobs WHERE id = ?1 AND status IN (0, 1)) "             \
+  "AND k = ?2 AND owner = ?3 AND done = 0"
+
+static int lite_renew(void *b, const char *owner, const char *id, long chunk,
+                      double until) {
+  lite *l = b;
+  if (enter(l))
+    return STORE_ERROR;
+  sqlite3_stmt *st = prep(l, "UPDATE chunks SET lease = ?4 WHERE " HELD);
+  int rc = STORE_ERROR;
+  if (st) {
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    sqlite3_bind_int64(st, 2, chunk);
+    sqlite3_bind_text(st, 3, owner, -1, SQLITE_STATIC);
+    sqlite3_bind_double(st, 4, until);
+    rc = run(l, st);
+    if (!rc && sqlite3_changes(l->db) == 0)
+      rc = STORE_NONE;
+  }
+  leave(l);
+  return rc;
+}
+
+static int lite_complete(void *b, const char *owner, const char *id, long chunk,
+                         const void *result, size_t len, int packed,
+                         double now) {
+  lite *l = b;
+  if (enter(l))
+    return STORE_ERROR;
+  int rc = begin(l);
+  sqlite3_stmt *st =
+      rc ? NULL
+         : prep(l, "UPDATE chunks SET done = 1, owner = NULL, lease = NULL, "
+                   "packed = ?4, result = ?5 WHERE " HELD);
+  if (!rc && !st)
+    rc = STORE_ERROR;
+  if (!rc) {
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    sqlite3_bind_int64(st, 2, chunk);
+    sqlite3_bind_text(st, 3, owner, -1, SQLITE_STATIC);
+    sqlite3_bind_int(st, 4, packed);
+    sqlite3_bind_blob64(st, 5, result ? result : "", len, SQLITE_STATIC);
+    rc = run(l, st);
+    if (!rc && sqlite3_changes(l->db) == 0)
+      rc = STORE_NONE;
+  }
+  if (!rc) {
+    st = prep(l, "UPDATE jobs SET chunks_done = chunks_done + 1, "
+                 "items_done = items_done + (SELECT items FROM chunks "
+                 "WHERE job = jobs.n AND k = ?2), updated = ?3, "
+                 "status = CASE WHEN chunks_done + 1 = chunks THEN 2 "
+                 "ELSE status END, finished = CASE WHEN chunks_done + 1 = "
+                 "chunks THEN ?3 ELSE finished END WHERE id = ?1");
+    if (!st) {
+      rc = STORE_ERROR;
+    } else {
+      sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+      sqlite3_bind_int64(st, 2, chunk);
+      sqlite3_bind_double(st, 3, now);
+      rc = run(l, st);
+    }
+  }
+  rc = rc ? rollback(l, rc) : commit(l);
+  leave(l);
+  return rc;
+}
+
+static int lite_fail(void *b, const char *id, const char *message, int status,
+                     const char *problem, size_t len, double now) {
+  lite *l = b;
+  if (enter(l))
+    return STORE_ERROR;
+  int rc = begin(l);
+  sqlite3_stmt *st =
+      rc ? NULL
+         : prep(l, "UPDATE jobs SET status = 3, message = ?2, "
+                   "problem_status = ?3, problem = ?4, updated = ?5, "
+                   "finished = ?5 WHERE id = ?1 AND status IN (0, 1)");
+  if (!rc && !st)
+    rc = STORE_ERROR;
+  if (!rc) {
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    sqlite3_bind_text(st, 2, message ? message : "", -1, SQLITE_STATIC);
+    sqlite3_bind_int(st, 3, status);
+    sqlite3_bind_blob64(st, 4, problem ? problem : "", len, SQLITE_STATIC);
+    sqlite3_bind_double(st, 5, now);
+    rc = run(l, st);
+    if (!rc && sqlite3_changes(l->db) == 0)
+      rc = STORE_NONE;
+  }
+  /* a failed job's answer is its problem: its chunks are of no more use */
+  if (!rc) {
+    st = prep(l, "DELETE FROM chunks WHERE job = "
+                 "(SELECT n FROM jobs WHERE id = ?)");
+    if (!st) {
+      rc = STORE_ERROR;
+    } else {
+      sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+      rc = run(l, st);
+    }
+  }
+  rc = rc ? rollback(l, rc) : commit(l);
+  leave(l);
+  return rc;
+}
+
+static int lite_result(void *b, const char *id, long chunk, char **buf,
+                       size_t *len, int *packed) {
+  lite *l = b;
+  if (enter(l))
+    return STORE_ERROR;
+  sqlite3_stmt *st = prep(l, "SELECT result, packed FROM chunks WHERE job = "
+                             "(SELECT n FROM jobs WHERE id = ?) AND k = ? "
+                             "AND done = 1");
+  int rc = STORE_ERROR;
+  if (st) {
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    sqlite3_bind_int64(st, 2, chunk);
+    rc = read_blob(l, st, 0, buf, len, packed);
+  }
+  sqlite3_finalize(st);
+  leave(l);
+  return rc;
+}
+
+static int lite_problem(void *b, const char *id, int *status, char **body,
+                        size_t *len) {
+  lite *l = b;
+  if (enter(l))
+    return STORE_ERROR;
+  sqlite3_stmt *st = prep(l, "SELECT problem, problem_status FROM jobs "
+                             "WHERE id = ? AND status = 3");
+  int rc = STORE_ERROR;
+  if (st) {
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    rc = read_blob(l, st, 0, body, len, status);
+  }
+  sqlite3_finalize(st);
+  leave(l);
+  return rc;
+}
+
+static int lite_dismiss(void *b, const char *id, double now) {
+  lite *l = b;
+  if (enter(l))
+    return STORE_ERROR;
+  int rc = begin(l);
+  sqlite3_stmt *st =
+      rc ? NULL
+         : prep(l, "UPDATE jobs SET status = 4, body = NULL, problem = NULL, "
+                   "updated = ?2, finished = CASE WHEN finished = 0 THEN ?2 "
+                   "ELSE finished END WHERE id = ?1 AND status != 4");
+  if (!rc && !st)
+    rc = STORE_ERROR;
+  if (!rc) {
+    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+    sqlite3_bind_double(st, 2, now);
+    rc = run(l, st);
+    if (!rc && sqlite3_changes(l->db) == 0)
+      rc = STORE_NONE;
+  }
+  if (!rc) {
+    st = prep(l, "DELETE FROM chunks WHERE job = "
+                 "(SELECT n FROM jobs WHERE id = ?)");
+    if (!st) {
+      rc = STORE_ERROR;
+    } else {
+      sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
+      rc = run(l, st);
+    }
+  }
+  rc = rc ? rollback(l, rc) : commit(l);
+  leave(l);
+  return rc;
+}
+
+static int lite_counts(void *b, long by_status[5], long *chunks_pending) {
+  lite *l = b;
+  for (int i = 0; i < 5; i++)
+    by_status[i] = 0;
+  *chunks_pending = 0;
+  if (enter(l))
+    return STORE_ERROR;
+  sqlite3_stmt *st =
+      prep(l, "SELECT status, count(*) FROM jobs GROUP BY status");
+  int rc = st ? 0 : STORE_ERROR, s = SQLITE_DONE;
+  while (st && (s = sqlite3_step(st)) == SQLITE_ROW) {
+    int k = sqlite3_column_int(st, 0);
+    if (k >= 0 && k < 5)
+      by_status[k] = (long)sqlite3_column_int64(st, 1);
+  }
+  if (st && s != SQLITE_DONE)
+    rc = fail_db(l, "count jobs");
+  sqlite3_finalize(st);
+  st = rc ? NULL
+          : prep(l, "SELECT count(*) FROM chunks c JOIN jobs j ON j.n = "
+                    "c.job WHERE j.status IN (0, 1) AND c.done = 0");
+  if (!rc && !st)
+    rc = STORE_ERROR;
+  if (st && sqlite3_step(st) == SQLITE_ROW)
+    *chunks_pending = (long)sqlite3_column_int64(st, 0);
+  else if (st)
+    rc = fail_db(l, "count chunks");
+  sqlite3_finalize(st);
+  leave(l);
+  return rc;
+}
+
+static int lite_expire(void *b, double before, long *n) {
+  lite *l = b;
+  *n = 0;
+  if (enter(l))
+    return STORE_ERROR;
+  int rc = begin(l);
+  /* the chunks go with their job (ON DELETE CASCADE) */
+  sqlite3_stmt *st =
+      rc ? NULL
+         : prep(l, "DELETE FROM jobs WHERE status >= 2 AND finished < ?");
+  if (!rc && !st)
+    rc = STORE_ERROR;
+  if (!rc) {
+    sqlite3_bind_double(st, 1, before);
+    rc = run(l, st);
+    if (!rc)
+      *n = (long)sqlite3_changes(l->db);
+  }
+  rc = rc ? rollback(l, rc) : commit(l);
+  leave(l);
+  return rc;
+}
+
+const store_ops store__sqlite_ops = {
+    .kind = "sqlite",
+    .close = lite_close,
+    .submit = lite_submit,
+    .get = lite_get,
+    .body = lite_body,
+    .list = lite_list,
+    .claim = lite_claim,
+    .renew = lite_renew,
+    .complete = lite_complete,
+    .fail = lite_fail,
+    .result = lite_result,
+    .problem = lite_problem,
+    .dismiss = lite_dismiss,
+    .counts = lite_counts,
+    .expire = lite_expire,
+};

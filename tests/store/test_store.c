@@ -1,0 +1,387 @@
+/*
+ * test_store.c: the job store (server/store.h), the same checks against
+ * each backend: test_store URI, with URI sqlite:PATH (a fresh file) or
+ * postgresql://... (its stickslip_* tables are dropped first).  For
+ * PostgreSQL, test_store @FILE reads the URI from FILE, which the CTest
+ * fixture pg (scripts/pg-throwaway.sh) writes; a missing file is a skip
+ * (77), unless SS_REQUIRE_PG is set (CI), where it is a failure.
+ *
+ * Jobs, paging, bodies; claims by stage, by lease, oldest job first;
+ * renew and complete under a lease, and nothing written without it;
+ * results compressed and not, byte for byte; fail, dismiss, counts,
+ * expire; four claimers on two handles (two replicas) taking every chunk of
+ * one job exactly once; and for SQLite, the file deleted or opened
+ * read-only: every write fails.
+ */
+#include <libpq-fe.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "store.h"
+#include "test.h"
+
+static const char *uri;
+static char uri_buf[1024];
+
+static store *open_store(void) {
+  store *s = NULL;
+  char why[512];
+  if (store_open(uri, &s, why, sizeof why) != 0) {
+    fprintf(stderr, "cannot open %s: %s\n", uri, why);
+    exit(1);
+  }
+  return s;
+}
+
+static void make_job(store_job *j, const char *id, const char *path,
+                     double created) {
+  memset(j, 0, sizeof *j);
+  snprintf(j->id, sizeof j->id, "%s", id);
+  snprintf(j->path, sizeof j->path, "%s", path);
+  j->created = created;
+}
+
+static const char *ID_A = "aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa1";
+static const char *ID_B = "bbbbbbbbbbbbbbbbbbbbbbbbbbbbbbb2";
+static const char *ID_C = "ccccccccccccccccccccccccccccccc3";
+
+static void test_jobs(store *s) {
+  store_chunk a[3] = {{0, 5}, {0, 7}, {1, 0}}, b[1] = {{0, 1}},
+              c[2] = {{0, 2}, {0, 2}};
+  store_job j;
+  const char body_a[] = "{\"requests\":[1,\0 2]}"; /* a NUL inside */
+  make_job(&j, ID_A, "/batch", 1000);
+  ASSERT_EQ_INT(store_submit(s, &j, body_a, sizeof body_a, a, 3), 0);
+  make_job(&j, ID_B, "/orbit", 1001);
+  ASSERT_EQ_INT(store_submit(s, &j, "{}", 2, b, 1), 0);
+  make_job(&j, ID_C, "/map", 1002);
+  ASSERT_EQ_INT(store_submit(s, &j, "{\"axes\":[]}", 11, c, 2), 0);
+  /* the same id twice is refused */
+  make_job(&j, ID_C, "/map", 1003);
+  ASSERT_EQ_INT(store_submit(s, &j, "{}", 2, c, 2), STORE_ERROR);
+
+  store_job g;
+  ASSERT_EQ_INT(store_get(s, ID_A, &g), 0);
+  ASSERT_TRUE(!strcmp(g.id, ID_A) && !strcmp(g.path, "/batch"));
+  ASSERT_EQ_INT(g.status, STORE_ACCEPTED);
+  ASSERT_EQ_INT(g.chunks, 3);
+  ASSERT_EQ_INT(g.items, 12);
+  ASSERT_EQ_INT(g.chunks_done + g.items_done, 0);
+  ASSERT_NEAR(g.created, 1000, 0);
+  ASSERT_NEAR(g.started + g.finished, 0, 0);
+  ASSERT_EQ_INT(store_get(s, "ffffffffffffffffffffffffffffffff", &g),
+                STORE_NONE);
+
+  char *body = NULL;
+  size_t len = 0;
+  ASSERT_EQ_INT(store_body(s, ID_A, &body, &len), 0);
+  ASSERT_TRUE(len == sizeof body_a && !memcmp(body, body_a, len));
+  free(body);
+
+  store_job list[2];
+  size_t n = 0;
+  long total = 0;
+  ASSERT_EQ_INT(store_list(s, 0, 2, list, &n, &total), 0);
+  ASSERT_TRUE(n == 2 && total == 3);
+  ASSERT_TRUE(n == 2 && !strcmp(list[0].id, ID_C) && !strcmp(list[1].id, ID_B));
+  ASSERT_EQ_INT(store_list(s, 2, 2, list, &n, &total), 0);
+  ASSERT_TRUE(n == 1 && total == 3 && !strcmp(list[0].id, ID_A));
+  ASSERT_EQ_INT(store_list(s, 5, 2, list, &n, &total), 0);
+  ASSERT_TRUE(n == 0 && total == 3);
+}
+
+/* Claims: the oldest job first, by stage, by lease. */
+static void test_claims(store *s) {
+  char id[STORE_ID_LEN + 1];
+  long k = -1;
+  ASSERT_EQ_INT(store_claim(s, "r1", 2000, 10, id, &k), 0);
+  ASSERT_TRUE(!strcmp(id, ID_A) && k == 0);
+  store_job g;
+  store_get(s, ID_A, &g);
+  ASSERT_EQ_INT(g.status, STORE_RUNNING);
+  ASSERT_NEAR(g.started, 2000, 0);
+  ASSERT_EQ_INT(store_claim(s, "r1", 2000, 10, id, &k), 0);
+  ASSERT_TRUE(!strcmp(id, ID_A) && k == 1);
+  /* A's chunk 2 is of stage 1: B's chunk comes next */
+  ASSERT_EQ_INT(store_claim(s, "r2", 2001, 1000, id, &k), 0);
+  ASSERT_TRUE(!strcmp(id, ID_B) && k == 0);
+  /* C's two chunks, then nothing */
+  ASSERT_EQ_INT(store_claim(s, "r2", 2001, 1000, id, &k), 0);
+  ASSERT_TRUE(!strcmp(id, ID_C) && k == 0);
+  ASSERT_EQ_INT(store_claim(s, "r2", 2001, 1000, id, &k), 0);
+  ASSERT_TRUE(!strcmp(id, ID_C) && k == 1);
+  ASSERT_EQ_INT(store_claim(s, "r2", 2001, 1000, id, &k), STORE_NONE);
+
+  /* renew: the owner, not another */
+  ASSERT_EQ_INT(store_renew(s, "r1", ID_A, 0, 2020), 0);
+  ASSERT_EQ_INT(store_renew(s, "r2", ID_A, 0, 2020), STORE_NONE);
+  /* A's chunk 1 (lease to 2010) lapses; chunk 0 was renewed to 2020 */
+  ASSERT_EQ_INT(store_claim(s, "r3", 2015, 10, id, &k), 0);
+  ASSERT_TRUE(!strcmp(id, ID_A) && k == 1);
+  /* r1 has lost it: its result is not written, r3's is */
+  ASSERT_EQ_INT(store_complete(s, "r1", ID_A, 1, "old", 3, 2016), STORE_NONE);
+  char *buf = NULL;
+  size_t len = 0;
+  ASSERT_EQ_INT(store_result(s, ID_A, 1, &buf, &len), STORE_NONE);
+  ASSERT_EQ_INT(store_renew(s, "r1", ID_A, 1, 2030), STORE_NONE);
+  ASSERT_EQ_INT(store_complete(s, "r3", ID_A, 1, "new\n", 4, 2016), 0);
+  ASSERT_EQ_INT(store_result(s, ID_A, 1, &buf, &len), 0);
+  ASSERT_TRUE(len == 4 && !memcmp(buf, "new\n", 4));
+  free(buf);
+  /* stored once: a second complete is refused */
+  ASSERT_EQ_INT(store_complete(s, "r3", ID_A, 1, "again", 5, 2017), STORE_NONE);
+  store_get(s, ID_A, &g);
+  ASSERT_TRUE(g.chunks_done == 1 && g.items_done == 7);
+  ASSERT_EQ_INT(g.status, STORE_RUNNING);
+
+  /* stage 1 waits for chunk 0; then A's last chunk, compressed */
+  ASSERT_EQ_INT(store_claim(s, "r4", 2017, 10, id, &k), STORE_NONE);
+  size_t big = 200000;
+  char *text = malloc(big);
+  for (size_t i = 0; i < big; i++)
+    text[i] = "{\"index\":[1,2],\"orbits\":[]}\n"[i % 29];
+  ASSERT_EQ_INT(store_complete(s, "r1", ID_A, 0, text, big, 2018), 0);
+  ASSERT_EQ_INT(store_claim(s, "r4", 2018, 10, id, &k), 0);
+  ASSERT_TRUE(!strcmp(id, ID_A) && k == 2);
+  ASSERT_EQ_INT(store_result(s, ID_A, 0, &buf, &len), 0);
+  ASSERT_TRUE(len == big && !memcmp(buf, text, big) && buf[len] == 0);
+  free(buf);
+  /* incompressible bytes, stored as they are */
+  for (size_t i = 0; i < 5000; i++)
+    text[i] = (char)(rand() & 0xff);
+  ASSERT_EQ_INT(store_complete(s, "r4", ID_A, 2, text, 5000, 2019.5), 0);
+  ASSERT_EQ_INT(store_result(s, ID_A, 2, &buf, &len), 0);
+  ASSERT_TRUE(len == 5000 && !memcmp(buf, text, 5000));
+  free(buf);
+  free(text);
+  store_get(s, ID_A, &g);
+  ASSERT_EQ_INT(g.status, STORE_SUCCESSFUL);
+  ASSERT_TRUE(g.chunks_done == 3 && g.items_done == 12);
+  ASSERT_NEAR(g.finished, 2019.5, 0);
+  ASSERT_EQ_INT(store_claim(s, "r4", 2019, 10, id, &k), STORE_NONE);
+}
+
+static void test_fail_dismiss(store *s) {
+  const char *prob = "{\"status\":422,\"type\":\"/problems/limit\"}";
+  /* B fails: its problem is kept, its chunk is no longer stored */
+  ASSERT_EQ_INT(
+      store_fail(s, ID_B, "over the time", 422, prob, strlen(prob), 2100), 0);
+  ASSERT_EQ_INT(store_fail(s, ID_B, "again", 500, "x", 1, 2101), STORE_NONE);
+  store_job g;
+  store_get(s, ID_B, &g);
+  ASSERT_EQ_INT(g.status, STORE_FAILED);
+  ASSERT_TRUE(!strcmp(g.message, "over the time"));
+  ASSERT_NEAR(g.finished, 2100, 0);
+  int status = 0;
+  char *body = NULL;
+  size_t len = 0;
+  ASSERT_EQ_INT(store_problem(s, ID_B, &status, &body, &len), 0);
+  ASSERT_TRUE(status == 422 && len == strlen(prob) && !memcmp(body, prob, len));
+  free(body);
+  ASSERT_EQ_INT(store_problem(s, ID_A, &status, &body, &len), STORE_NONE);
+  ASSERT_EQ_INT(store_complete(s, "r2", ID_B, 0, "late", 4, 2102), STORE_NONE);
+
+  /* C dismissed while running: results gone, no claims, its row kept */
+  ASSERT_EQ_INT(store_complete(s, "r2", ID_C, 0, "cell\n", 5, 2103), 0);
+  long by[5], pending = -1;
+  ASSERT_EQ_INT(store_counts(s, by, &pending), 0);
+  ASSERT_TRUE(by[STORE_RUNNING] == 1 && by[STORE_SUCCESSFUL] == 1 &&
+              by[STORE_FAILED] == 1 && pending == 1);
+  ASSERT_EQ_INT(store_dismiss(s, ID_C, 2104), 0);
+  ASSERT_EQ_INT(store_dismiss(s, ID_C, 2105), STORE_NONE);
+  ASSERT_EQ_INT(store_dismiss(s, "0123456789abcdef0123456789abcdef", 2105),
+                STORE_NONE);
+  ASSERT_EQ_INT(store_result(s, ID_C, 0, &body, &len), STORE_NONE);
+  ASSERT_EQ_INT(store_body(s, ID_C, &body, &len), STORE_NONE);
+  ASSERT_EQ_INT(store_renew(s, "r2", ID_C, 1, 3000), STORE_NONE);
+  ASSERT_EQ_INT(store_complete(s, "r2", ID_C, 1, "x", 1, 2106), STORE_NONE);
+  store_get(s, ID_C, &g);
+  ASSERT_EQ_INT(g.status, STORE_DISMISSED);
+  ASSERT_NEAR(g.finished, 2104, 0);
+  ASSERT_EQ_INT(store_counts(s, by, &pending), 0);
+  ASSERT_TRUE(by[STORE_DISMISSED] == 1 && by[STORE_RUNNING] == 0 &&
+              pending == 0);
+
+  /* expire: finished before 2101 (A at 2019.5, B at 2100), not C */
+  long n = 0;
+  ASSERT_EQ_INT(store_expire(s, 2101, &n), 0);
+  ASSERT_EQ_INT(n, 2);
+  ASSERT_EQ_INT(store_get(s, ID_A, &g), STORE_NONE);
+  ASSERT_EQ_INT(store_result(s, ID_A, 0, &body, &len), STORE_NONE);
+  ASSERT_EQ_INT(store_get(s, ID_C, &g), 0);
+  ASSERT_EQ_INT(store_expire(s, 1e12, &n), 0);
+  ASSERT_EQ_INT(n, 1);
+}
+
+/* Four claimers on two handles, one job of many chunks: each chunk once. */
+#define RACE_CHUNKS 400
+static const char *RACE_ID = "dddddddddddddddddddddddddddddd44";
+static atomic_int claimed[RACE_CHUNKS];
+static atomic_int errors;
+
+typedef struct claimer {
+  store *s;
+  char owner[16];
+} claimer;
+
+static void *claim_all(void *arg) {
+  claimer *c = arg;
+  char id[STORE_ID_LEN + 1];
+  long k;
+  int rc;
+  while ((rc = store_claim(c->s, c->owner, 5000, 600, id, &k)) == 0) {
+    if (k < 0 || k >= RACE_CHUNKS || strcmp(id, RACE_ID))
+      atomic_fetch_add(&errors, 1);
+    else
+      atomic_fetch_add(&claimed[k], 1);
+    if (store_complete(c->s, c->owner, id, k, c->owner, strlen(c->owner),
+                       5001) != 0)
+      atomic_fetch_add(&errors, 1);
+  }
+  if (rc != STORE_NONE) {
+    fprintf(stderr, "claim: %s\n", store_error(c->s));
+    atomic_fetch_add(&errors, 1);
+  }
+  return NULL;
+}
+
+static void test_race(store *s1) {
+  store *s2 = open_store();
+  store_chunk *ch = calloc(RACE_CHUNKS, sizeof *ch);
+  for (int i = 0; i < RACE_CHUNKS; i++)
+    ch[i].items = 1;
+  store_job j;
+  make_job(&j, RACE_ID, "/batch", 4000);
+  ASSERT_EQ_INT(store_submit(s1, &j, "{}", 2, ch, RACE_CHUNKS), 0);
+  free(ch);
+  claimer c[4] = {{s1, "p1"}, {s1, "p2"}, {s2, "q1"}, {s2, "q2"}};
+  pthread_t t[4];
+  for (int i = 0; i < 4; i++)
+    pthread_create(&t[i], NULL, claim_all, &c[i]);
+  for (int i = 0; i < 4; i++)
+    pthread_join(t[i], NULL);
+  int once = 0;
+  for (int i = 0; i < RACE_CHUNKS; i++)
+    once += atomic_load(&claimed[i]) == 1;
+  ASSERT_EQ_INT(once, RACE_CHUNKS);
+  ASSERT_EQ_INT(atomic_load(&errors), 0);
+  store_job g;
+  store_get(s2, RACE_ID, &g);
+  ASSERT_EQ_INT(g.status, STORE_SUCCESSFUL);
+  ASSERT_TRUE(g.chunks_done == RACE_CHUNKS && g.items_done == RACE_CHUNKS);
+  /* both handles computed some (the claimers interleave) */
+  int by_q = 0;
+  for (int k = 0; k < RACE_CHUNKS; k++) {
+    char *buf;
+    size_t len;
+    if (store_result(s1, RACE_ID, k, &buf, &len) == 0) {
+      by_q += buf[0] == 'q';
+      free(buf);
+    }
+  }
+  printf("race: %d of %d chunks by the second handle\n", by_q, RACE_CHUNKS);
+  ASSERT_TRUE(by_q > 0 && by_q < RACE_CHUNKS);
+  store_close(s2);
+}
+
+/* SQLite: the file deleted under the store, and a read-only store. */
+static void test_sqlite_faults(const char *path) {
+  store *s = open_store();
+  store_chunk c[1] = {{0, 1}};
+  store_job j;
+  make_job(&j, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee5", "/orbit", 6000);
+  ASSERT_EQ_INT(store_submit(s, &j, "{}", 2, c, 1), 0);
+  store_close(s);
+
+  char ro[1200];
+  snprintf(ro, sizeof ro, "%s?mode=ro", uri);
+  store *r = NULL;
+  char why[512];
+  ASSERT_EQ_INT(store_open(ro, &r, why, sizeof why), 0);
+  if (r) {
+    store_job g;
+    ASSERT_EQ_INT(store_get(r, j.id, &g), 0);
+    make_job(&j, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee6", "/orbit", 6001);
+    ASSERT_EQ_INT(store_submit(r, &j, "{}", 2, c, 1), STORE_ERROR);
+    printf("read-only: %s\n", store_error(r));
+    char id[STORE_ID_LEN + 1];
+    long k;
+    ASSERT_EQ_INT(store_claim(r, "r", 6002, 10, id, &k), STORE_ERROR);
+    store_close(r);
+  }
+
+  s = open_store();
+  ASSERT_EQ_INT(unlink(path), 0);
+  make_job(&j, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee7", "/orbit", 6003);
+  ASSERT_EQ_INT(store_submit(s, &j, "{}", 2, c, 1), STORE_ERROR);
+  printf("deleted: %s\n", store_error(s));
+  ASSERT_TRUE(strstr(store_error(s), "deleted") != NULL);
+  store_job g;
+  ASSERT_EQ_INT(store_get(s, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee5", &g),
+                STORE_ERROR);
+  store_close(s);
+
+  /* neither a store URI nor a reachable database */
+  ASSERT_EQ_INT(store_open("mysql://x", &r, why, sizeof why), STORE_ERROR);
+  ASSERT_TRUE(r == NULL && strstr(why, "sqlite:") != NULL);
+  ASSERT_EQ_INT(
+      store_open("sqlite:/proc/no/such/dir/x.sqlite", &r, why, sizeof why),
+      STORE_ERROR);
+  ASSERT_EQ_INT(store_open("postgresql://127.0.0.1:1/none?connect_timeout=2",
+                           &r, why, sizeof why),
+                STORE_ERROR);
+  printf("unreachable: %s\n", why);
+}
+
+static void drop_pg_tables(void) {
+  PGconn *c = PQconnectdb(uri);
+  if (PQstatus(c) == CONNECTION_OK)
+    PQclear(PQexec(c, "DROP TABLE IF EXISTS stickslip_chunks, "
+                      "stickslip_jobs, stickslip_meta"));
+  PQfinish(c);
+}
+
+int main(int argc, char **argv) {
+  if (argc < 2) {
+    fprintf(stderr, "usage: test_store sqlite:PATH | postgresql://... | "
+                    "@FILE\n");
+    return 2;
+  }
+  uri = argv[1];
+  if (uri[0] == '@') {
+    FILE *f = fopen(uri + 1, "r");
+    if (!f || !fgets(uri_buf, sizeof uri_buf, f)) {
+      if (f)
+        fclose(f);
+      if (getenv("SS_REQUIRE_PG")) {
+        fprintf(stderr, "no PostgreSQL: %s unreadable\n", uri + 1);
+        return 1;
+      }
+      printf("no PostgreSQL (%s unreadable): skipped\n", uri + 1);
+      return 77;
+    }
+    fclose(f);
+    uri_buf[strcspn(uri_buf, "\n")] = 0;
+    uri = uri_buf;
+  }
+  int lite = !strncmp(uri, "sqlite:", 7);
+  if (lite)
+    unlink(uri + 7);
+  else
+    drop_pg_tables();
+  srand(7);
+  store *s = open_store();
+  printf("store: %s\n", store_kind(s));
+  test_jobs(s);
+  test_claims(s);
+  test_fail_dismiss(s);
+  test_race(s);
+  store_close(s);
+  if (lite)
+    test_sqlite_faults(uri + 7);
+  TEST_DONE();
+}
