@@ -61,7 +61,8 @@ static const struct {
  */
 #define API_JOB_CUTS(X)                                                        \
   X(BATCH, ep_batch_job_cut, ep_batch_job_run, "application/x-ndjson",         \
-    ep_batch_job_open)
+    ep_batch_job_open)                                                         \
+  X(MAP, ep_map_job_cut, ep_map_job_run, "application/x-ndjson", NULL)
 
 #define JOB_CUT_DECLARE(name, cut, run, media, open)                           \
   ep_job_cut_fn cut;                                                           \

@@ -1305,6 +1305,21 @@ typedef struct ss_map_cell {
   int truncated;        /**< orbits left out for want of room */
 } ss_map_cell;
 
+/** The most orbits one full search of a map's cell gives. */
+#define SS_MAP_FOUND_MAX 32
+
+/** The full search of one cell of a map (ss_map_search()): what it found,
+ *  before the cell takes it (the cell drops what its kinds, max_period and
+ *  max_orbits leave out, and what it holds already). */
+typedef struct ss_map_found {
+  int status;   /**< of the search: SS_OK (the cell is complete), or what
+                     stops the map (ss_map_run() returns it) */
+  ss_diag diag; /**< why, when status is not SS_OK */
+  int n_orbits;
+  /** in the order found; from_cell -1 */
+  ss_map_orbit orbits[SS_MAP_FOUND_MAX];
+} ss_map_found;
+
 /** Options of ss_map_run(); zero-initialise for the defaults. */
 typedef struct ss_map_opts {
   unsigned kinds; /**< mask of ss_orbit_kind; 0 means all */
@@ -1329,6 +1344,15 @@ typedef struct ss_map_opts {
   /** Polled between cells: a non-zero answer stops with SS_ECANCELED. */
   int (*cancelled)(void *cls);
   void *cancel_cls;
+  /** Non-NULL: full searches made already, apart (a map made in pieces:
+   *  ss_map_lattice(), ss_map_search()).  Asked, on the calling thread,
+   *  for each cell before the map searches it: 1 and *found as
+   *  ss_map_search() gave it for this cell with the same parameters, axes
+   *  and options (found->status neither SS_ELIMIT_TIME nor SS_ECANCELED);
+   *  or 0, and the map makes that search itself.  The map is the same, bit
+   *  for bit, either way; a search given counts in ss_map.searches. */
+  int (*searched)(void *cls, int cell, ss_map_found *found);
+  void *searched_cls;
 } ss_map_opts;
 
 /** A map: cells in row-major order, cell (i, j) at i * axes[1].n + j. */
@@ -1374,6 +1398,36 @@ SS_API int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
 
 /** Release what ss_map_run() allocated.  NULL-safe; zeroes @a map. */
 SS_API void ss_map_free(ss_map *map);
+
+/**
+ * The cells where ss_map_run() with these arguments makes its first full
+ * searches, the lattice (row-major order).  Those searches are independent
+ * of each other and nearly all of a map's time: made apart with
+ * ss_map_search() and given back through ss_map_opts.searched, they make
+ * the map ss_map_run() makes alone.  (The searches where families end
+ * depend on the spreading: ss_map_run() makes them.)
+ * @param[out] cells  room for every cell of the map
+ * @param[out] n      how many cells the lattice has
+ * @return SS_OK; otherwise what ss_map_run() returns before any search
+ *         (SS_EINVAL, SS_EDOMAIN with @a d), and *n is untouched.
+ *         Thread-safe; allocates nothing.
+ */
+SS_API int ss_map_lattice(const ss_params *p, int n_axes,
+                          const ss_map_axis *axes, const ss_map_opts *opts,
+                          int *cells, int *n, ss_diag *d);
+
+/**
+ * The full search of cell @a cell, as ss_map_run() with these arguments
+ * makes it (the same code; opts->threads and opts->searched are not read):
+ * ss_orbit_find() with the map's kinds, max_period and effort, within
+ * opts->max_seconds from the call and opts->cancelled.
+ * @param[out] found  the search; its own outcome in found->status
+ * @return SS_OK (the search ran: *found); SS_EINVAL (bad arguments, no
+ *         such cell); SS_ENOMEM.  Thread-safe (the cancel hook aside).
+ */
+SS_API int ss_map_search(const ss_params *p, int n_axes,
+                         const ss_map_axis *axes, const ss_map_opts *opts,
+                         int cell, ss_map_found *found, ss_diag *d);
 
 /* ------------------------------------------------------------------------ */
 /* Basins of attraction                                                      */

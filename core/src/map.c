@@ -19,6 +19,14 @@
  * many of each neighbour's orbits it has tried; orbits are only ever
  * appended), and never the one that was itself continued from the cell:
  * solved back, it gives the orbit the cell has.
+ *
+ * A map can be made in pieces: the full searches of its lattice
+ * (ss_map_lattice) each made on its own (ss_map_search, anywhere, in any
+ * order), then handed to ss_map_run (ss_map_opts.searched), which takes a
+ * search it is given where it would have made it.  A search is what the
+ * search of a cell found (ss_map_found), before the cell takes it: the cell
+ * takes it by the one function that takes every orbit (add), whichever way
+ * the search was made, so the map is the same bit for bit.
  */
 #include <math.h>
 #include <pthread.h>
@@ -178,17 +186,41 @@ static void as_orbit(const ss_model *m, const ss_map_orbit *a, ss_orbit *o) {
   o->x0[1] += m->d0[1];
 }
 
-/* Add @a o to @a cell unless it holds it already; 1 if added. */
-static int add(mapper *mp, const ss_model *m, int cell, const ss_orbit *o,
-               int from_cell) {
+/* The map orbit of @a o, continued from @a from_cell (-1: searched). */
+static void to_map_orbit(const ss_orbit *o, int from_cell, ss_map_orbit *a) {
+  memset(a, 0, sizeof *a);
+  a->kind = o->kind;
+  a->n_phases = o->n_phases;
+  /* the phases alone: what follows them stays zero */
+  memcpy(a->modes, o->modes, (size_t)o->n_phases * sizeof a->modes[0]);
+  memcpy(a->durations, o->durations,
+         (size_t)o->n_phases * sizeof a->durations[0]);
+  a->period = o->period;
+  a->n_turns = o->n_turns;
+  memcpy(a->z0, o->z0, sizeof a->z0);
+  for (int k = 0; k < 2; k++) {
+    a->eig_re[k] = o->stab.eig_re[k];
+    a->eig_im[k] = o->stab.eig_im[k];
+  }
+  a->spectral_radius = o->stab.spectral_radius;
+  a->stable = o->stab.stable;
+  a->marginal = o->stab.marginal;
+  a->min_margin = o->min_margin;
+  a->from_cell = from_cell;
+}
+
+/* Add @a a to @a cell unless it holds it already; 1 if added. */
+static int add(mapper *mp, const ss_model *m, int cell, const ss_map_orbit *a) {
   ss_map_cell *c = &mp->map->cells[cell];
-  if (!(mp->kinds & o->kind) || o->n_turns > mp->max_period)
+  if (!(mp->kinds & a->kind) || a->n_turns > mp->max_period)
     return 0;
   double tol = 1e-6 * fmax(m->p.V, (m->p.ur - m->p.us) / m->p.chi);
+  ss_orbit o;
+  as_orbit(m, a, &o);
   for (int i = 0; i < c->n_orbits; i++) {
     ss_orbit q;
     as_orbit(m, &c->orbits[i], &q);
-    if (ss__same_orbit(m, o, &q, tol))
+    if (ss__same_orbit(m, &o, &q, tol))
       return 0;
   }
   if (c->n_orbits == mp->max_orbits) {
@@ -206,25 +238,7 @@ static int add(mapper *mp, const ss_model *m, int cell, const ss_orbit *o,
   }
   /* appended: the neighbours count what they tried in this order; sorted
    * when the map is done */
-  ss_map_orbit *a = &c->orbits[c->n_orbits];
-  memset(a, 0, sizeof *a);
-  a->kind = o->kind;
-  a->n_phases = o->n_phases;
-  memcpy(a->modes, o->modes, sizeof a->modes);
-  memcpy(a->durations, o->durations, sizeof a->durations);
-  a->period = o->period;
-  a->n_turns = o->n_turns;
-  memcpy(a->z0, o->z0, sizeof a->z0);
-  for (int k = 0; k < 2; k++) {
-    a->eig_re[k] = o->stab.eig_re[k];
-    a->eig_im[k] = o->stab.eig_im[k];
-  }
-  a->spectral_radius = o->stab.spectral_radius;
-  a->stable = o->stab.stable;
-  a->marginal = o->stab.marginal;
-  a->min_margin = o->min_margin;
-  a->from_cell = from_cell;
-  c->n_orbits++;
+  c->orbits[c->n_orbits++] = *a;
   return 1;
 }
 
@@ -241,26 +255,13 @@ static int model_of(mapper *mp, int cell, ss_model *m, ss_diag *d) {
   return rc ? rc : ss_model_init(m, &q, d);
 }
 
-/* A full search, made on any thread, its orbits added on the map's. */
-typedef struct job {
-  int cell;
-  int rc, n;
-  ss_model m;
-  ss_orbit out[32];
-  ss_diag d;
-} job;
-
-typedef struct pool {
-  mapper *mp;
-  job *jobs;
-  int n, next;
-  pthread_mutex_t lock;
-} pool;
-
-static void run_job(mapper *mp, job *jb) {
-  ss_diag_clear(&jb->d);
-  jb->n = 0;
-  if ((jb->rc = model_of(mp, jb->cell, &jb->m, &jb->d)) != SS_OK)
+/* The full search at @a cell into @a f (ss_map_search), and the cell's
+ * model into @a m; @a out: room for the search's orbits. */
+static void search_one(mapper *mp, int cell, ss_model *m, ss_orbit *out,
+                       ss_map_found *f) {
+  ss_diag_clear(&f->diag);
+  f->n_orbits = 0;
+  if ((f->status = model_of(mp, cell, m, &f->diag)) != SS_OK)
     return;
   ss_orbit_opts oo;
   memset(&oo, 0, sizeof oo);
@@ -272,11 +273,37 @@ static void run_job(mapper *mp, job *jb) {
   if (mp->o->max_seconds > 0) {
     oo.max_seconds = mp->o->max_seconds - (ss__now() - mp->t_start);
     if (!(oo.max_seconds > 0)) {
-      jb->rc = SS_ELIMIT_TIME;
+      f->status = SS_ELIMIT_TIME;
       return;
     }
   }
-  jb->rc = ss_orbit_find(&jb->m, &oo, jb->out, 32, &jb->n, NULL, &jb->d);
+  f->status = ss_orbit_find(m, &oo, out, SS_MAP_FOUND_MAX, &f->n_orbits, NULL,
+                            &f->diag);
+  for (int i = 0; i < f->n_orbits; i++)
+    to_map_orbit(&out[i], -1, &f->orbits[i]);
+}
+
+/* A full search, made on any thread (or given: opts->searched), its
+ * orbits added on the map's. */
+typedef struct job {
+  int cell, given;
+  ss_model m;
+  ss_map_found f;
+  ss_orbit out[SS_MAP_FOUND_MAX];
+} job;
+
+typedef struct pool {
+  mapper *mp;
+  job *jobs;
+  int n, next;
+  pthread_mutex_t lock;
+} pool;
+
+static void run_job(mapper *mp, job *jb) {
+  if (!jb->given)
+    search_one(mp, jb->cell, &jb->m, jb->out, &jb->f);
+  else if (model_of(mp, jb->cell, &jb->m, NULL) != SS_OK)
+    jb->f.n_orbits = 0; /* as the search itself, which stopped there */
 }
 
 static void *worker(void *arg) {
@@ -291,8 +318,45 @@ static void *worker(void *arg) {
   }
 }
 
+/* Whether opts->searched gives the search of @a jb's cell, on the map's
+ * thread (the hook need not be thread-safe); SS_EINVAL in mp->stopped when
+ * what it gives is no search. */
+static int given(mapper *mp, job *jb, ss_diag *d) {
+  const ss_map_opts *o = mp->o;
+  if (!o->searched || !o->searched(o->searched_cls, jb->cell, &jb->f))
+    return 0;
+  if (jb->f.n_orbits < 0 || jb->f.n_orbits > SS_MAP_FOUND_MAX) {
+    mp->stopped = ss__fail(d, SS_EINVAL, "searched", jb->f.n_orbits,
+                           "the search given for cell %d has %d orbits",
+                           jb->cell, jb->f.n_orbits);
+    return 0;
+  }
+  return 1;
+}
+
+/* Take the search of @a jb into its cell; the map's first failure, other
+ * than the time budget and a cancel (which stop it), into *rc and @a d. */
+static void take(mapper *mp, const job *jb, int *rc, ss_diag *d) {
+  mp->w[jb->cell].searched = 1;
+  mp->map->searches++;
+  int gained = 0;
+  for (int o = 0; o < jb->f.n_orbits; o++)
+    gained += add(mp, &jb->m, jb->cell, &jb->f.orbits[o]);
+  if (gained)
+    enqueue_neighbours(mp, jb->cell);
+  if (jb->f.status == SS_OK)
+    mp->map->cells[jb->cell].complete = 1;
+  else if (jb->f.status == SS_ELIMIT_TIME || jb->f.status == SS_ECANCELED)
+    mp->stopped = jb->f.status;
+  else if (*rc == SS_OK) {
+    *rc = jb->f.status;
+    if (d)
+      *d = jb->f.diag;
+  }
+}
+
 /* The full search at each of the @a n cells, on up to opts->threads
- * threads; their orbits are added in the order of the cells. */
+ * threads, or given; their orbits are added in the order of the cells. */
 static int search_cells(mapper *mp, const int *cells, int n, ss_diag *d) {
   enum { CHUNK = 64 };
   job *jobs = malloc(CHUNK * sizeof *jobs);
@@ -301,8 +365,12 @@ static int search_cells(mapper *mp, const int *cells, int n, ss_diag *d) {
   int rc = SS_OK;
   for (int at = 0; at < n && rc == SS_OK && !over_budget(mp); at += CHUNK) {
     int k = n - at < CHUNK ? n - at : CHUNK;
-    for (int i = 0; i < k; i++)
+    for (int i = 0; i < k && !mp->stopped; i++) {
       jobs[i].cell = cells[at + i];
+      jobs[i].given = given(mp, &jobs[i], d);
+    }
+    if (mp->stopped)
+      break;
     pool pl = {mp, jobs, k, 0, PTHREAD_MUTEX_INITIALIZER};
     int nt = mp->threads < k ? mp->threads : k, started = 0;
     pthread_t th[MAP_MAX_THREADS];
@@ -312,25 +380,8 @@ static int search_cells(mapper *mp, const int *cells, int n, ss_diag *d) {
     worker(&pl);
     for (int t = 0; t < started; t++)
       pthread_join(th[t], NULL);
-    for (int i = 0; i < k; i++) {
-      job *jb = &jobs[i];
-      mp->w[jb->cell].searched = 1;
-      mp->map->searches++;
-      int gained = 0;
-      for (int o = 0; o < jb->n; o++)
-        gained += add(mp, &jb->m, jb->cell, &jb->out[o], -1);
-      if (gained)
-        enqueue_neighbours(mp, jb->cell);
-      if (jb->rc == SS_OK)
-        mp->map->cells[jb->cell].complete = 1;
-      else if (jb->rc == SS_ELIMIT_TIME || jb->rc == SS_ECANCELED)
-        mp->stopped = jb->rc;
-      else if (rc == SS_OK) {
-        rc = jb->rc;
-        if (d)
-          *d = jb->d;
-      }
-    }
+    for (int i = 0; i < k; i++)
+      take(mp, &jobs[i], &rc, d);
   }
   free(jobs);
   return rc ? rc : mp->stopped;
@@ -378,9 +429,11 @@ static int visit(mapper *mp, int cell, ss_diag *d) {
       rc = ss_orbit_find(&m, &oo, &o, 1, &n, NULL, NULL);
       if (rc == SS_ENOMEM)
         return mp->stopped = rc;
-      if (n == 1)
-        gained += add(mp, &m, cell, &o, nb);
-      else if (note_failure(mp, cell, nb, t))
+      ss_map_orbit a;
+      if (n == 1) {
+        to_map_orbit(&o, nb, &a);
+        gained += add(mp, &m, cell, &a);
+      } else if (note_failure(mp, cell, nb, t))
         return mp->stopped;
     }
     w->tried[k] = b->n_orbits;
@@ -466,15 +519,15 @@ static int map_status(int rc, const ss_map_opts *opts, ss_diag *d) {
   return rc;
 }
 
-int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
-               const ss_map_opts *opts, ss_map *map, ss_diag *d) {
-  ss_map_opts def;
-  memset(&def, 0, sizeof def);
-  if (!map)
-    return ss__fail(d, SS_EINVAL, "map", 0, "missing output");
-  memset(map, 0, sizeof *map);
+/* What every entry point does first: the arguments checked, the options
+ * with their defaults into @a mp, the shape of @a map (its cells not
+ * allocated, their parameters not checked: check_cells). */
+static int map_setup(mapper *mp, const ss_params *p, int n_axes,
+                     const ss_map_axis *axes, const ss_map_opts *opts,
+                     ss_map *map, ss_diag *d) {
+  static const ss_map_opts defaults;
   if (!opts)
-    opts = &def;
+    opts = &defaults;
   if ((!p && !opts->physical) || !axes)
     return ss__fail(d, SS_EINVAL, "params", 0, "missing parameters or axes");
   if (n_axes < 1 || n_axes > 2)
@@ -486,58 +539,120 @@ int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
   if (opts->search_every < 0 || opts->max_orbits < 0)
     return ss__fail(d, SS_EINVAL, "search_every", opts->search_every,
                     "search_every and max_orbits are >= 0");
-  mapper mp;
-  memset(&mp, 0, sizeof mp);
-  mp.p = p;
-  mp.o = opts;
-  mp.map = map;
-  mp.kinds = opts->kinds ? opts->kinds : SS_ORBIT_ALL;
-  mp.max_period = opts->max_period ? opts->max_period : 4;
-  mp.effort = opts->effort ? opts->effort : 2;
-  mp.max_orbits = opts->max_orbits ? opts->max_orbits : MAP_MAX_ORBITS;
-  mp.threads = opts->threads < 1                 ? 1
-               : opts->threads > MAP_MAX_THREADS ? MAP_MAX_THREADS
-                                                 : opts->threads;
-  if (mp.max_period < 1 || mp.max_period > 8 || mp.effort < 1 || mp.effort > 3)
-    return ss__fail(d, SS_EINVAL, "max_period", mp.max_period,
+  memset(mp, 0, sizeof *mp);
+  mp->p = p;
+  mp->o = opts;
+  mp->map = map;
+  mp->kinds = opts->kinds ? opts->kinds : SS_ORBIT_ALL;
+  mp->max_period = opts->max_period ? opts->max_period : 4;
+  mp->effort = opts->effort ? opts->effort : 2;
+  mp->max_orbits = opts->max_orbits ? opts->max_orbits : MAP_MAX_ORBITS;
+  mp->threads = opts->threads < 1                 ? 1
+                : opts->threads > MAP_MAX_THREADS ? MAP_MAX_THREADS
+                                                  : opts->threads;
+  if (mp->max_period < 1 || mp->max_period > 8 || mp->effort < 1 ||
+      mp->effort > 3)
+    return ss__fail(d, SS_EINVAL, "max_period", mp->max_period,
                     "max_period is 1..8 and effort 1..3");
-  mp.t_start = ss__now();
+  mp->t_start = ss__now();
   map->n_axes = n_axes;
   memcpy(map->axes, axes, (size_t)n_axes * sizeof *axes);
   if (n_axes == 1) /* one column: cell j is (0, j) */
     map->axes[1] =
         (ss_map_axis){axes[0].param, axes[0].from, axes[0].to, axes[0].n};
   map->n_cells = (int)cells;
-  /* every cell's parameters in range, before any work */
-  for (int i = 0; i < map->n_cells; i++) {
+  return SS_OK;
+}
+
+/* Every cell's parameters in range, before any work. */
+static int check_cells(const mapper *mp, ss_diag *d) {
+  for (int i = 0; i < mp->map->n_cells; i++) {
     ss_params q;
-    rc = ss_map_params(p, opts, map, i, &q, NULL, d);
-    if (rc != SS_OK) {
-      map->n_cells = 0;
+    int rc = ss_map_params(mp->p, mp->o, mp->map, i, &q, NULL, d);
+    if (rc != SS_OK)
       return rc;
-    }
   }
-  map->cells = calloc((size_t)cells, sizeof *map->cells);
-  mp.w = calloc((size_t)cells, sizeof *mp.w);
-  mp.queue = malloc((size_t)cells * sizeof *mp.queue);
-  if (!map->cells || !mp.w || !mp.queue) {
+  return SS_OK;
+}
+
+/* The cells of the lattice, row-major, into @a todo; how many. */
+static int lattice(const mapper *mp, int *todo) {
+  const ss_map *map = mp->map;
+  int every = mp->o->search_every ? mp->o->search_every : MAP_SEARCH_EVERY;
+  int n0 = map->n_axes == 2 ? map->axes[0].n : 1, n1 = map->axes[1].n, n = 0;
+  for (int i = 0; i < n0; i++)
+    for (int j = 0; j < n1; j++)
+      if ((map->n_axes == 1 || on_lattice(i, n0, every)) &&
+          on_lattice(j, n1, every))
+        todo[n++] = i * n1 + j;
+  return n;
+}
+
+int ss_map_lattice(const ss_params *p, int n_axes, const ss_map_axis *axes,
+                   const ss_map_opts *opts, int *cells, int *n, ss_diag *d) {
+  ss_map map;
+  mapper mp;
+  memset(&map, 0, sizeof map);
+  if (!cells || !n)
+    return ss__fail(d, SS_EINVAL, "cells", 0, "missing output");
+  int rc = map_setup(&mp, p, n_axes, axes, opts, &map, d);
+  if (rc == SS_OK)
+    rc = check_cells(&mp, d);
+  if (rc == SS_OK)
+    *n = lattice(&mp, cells);
+  return rc;
+}
+
+int ss_map_search(const ss_params *p, int n_axes, const ss_map_axis *axes,
+                  const ss_map_opts *opts, int cell, ss_map_found *found,
+                  ss_diag *d) {
+  ss_map map;
+  mapper mp;
+  memset(&map, 0, sizeof map);
+  if (!found)
+    return ss__fail(d, SS_EINVAL, "found", 0, "missing output");
+  int rc = map_setup(&mp, p, n_axes, axes, opts, &map, d);
+  if (rc)
+    return rc;
+  if (cell < 0 || cell >= map.n_cells)
+    return ss__fail(d, SS_EINVAL, "cell", cell, "no such cell");
+  ss_model m;
+  ss_orbit *out = malloc(SS_MAP_FOUND_MAX * sizeof *out);
+  if (!out)
+    return ss__fail(d, SS_ENOMEM, "", 0, "out of memory for the search");
+  search_one(&mp, cell, &m, out, found);
+  free(out);
+  return SS_OK;
+}
+
+int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
+               const ss_map_opts *opts, ss_map *map, ss_diag *d) {
+  if (!map)
+    return ss__fail(d, SS_EINVAL, "map", 0, "missing output");
+  memset(map, 0, sizeof *map);
+  mapper mp;
+  int rc = map_setup(&mp, p, n_axes, axes, opts, map, d);
+  if (rc == SS_OK)
+    rc = check_cells(&mp, d);
+  if (rc) {
+    map->n_cells = 0;
+    return rc;
+  }
+  opts = mp.o;
+  size_t cells = (size_t)map->n_cells;
+  map->cells = calloc(cells, sizeof *map->cells);
+  mp.w = calloc(cells, sizeof *mp.w);
+  mp.queue = malloc(cells * sizeof *mp.queue);
+  int *todo = malloc(cells * sizeof *todo), n_todo = 0;
+  if (!map->cells || !mp.w || !mp.queue || !todo) {
     free(mp.w);
     free(mp.queue);
+    free(todo);
     ss_map_free(map);
     return ss__fail(d, SS_ENOMEM, "", 0, "out of memory for the map");
   }
-  int every = opts->search_every ? opts->search_every : MAP_SEARCH_EVERY;
-  int *todo = malloc((size_t)cells * sizeof *todo), n_todo = 0;
-  if (!todo)
-    rc = SS_ENOMEM;
-  /* the lattice */
-  int n0 = n_axes == 2 ? axes[0].n : 1, n1 = map->axes[1].n;
-  for (int i = 0; i < n0 && todo; i++)
-    for (int j = 0; j < n1; j++)
-      if ((n_axes == 1 || on_lattice(i, n0, every)) && on_lattice(j, n1, every))
-        todo[n_todo++] = i * n1 + j;
-  if (rc == SS_OK)
-    rc = search_cells(&mp, todo, n_todo, d);
+  n_todo = lattice(&mp, todo);
+  rc = search_cells(&mp, todo, n_todo, d);
   /* spread; search where families end; spread what that finds */
   while (rc == SS_OK && (rc = spread(&mp, d)) == SS_OK &&
          !opts->no_edge_search) {
