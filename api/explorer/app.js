@@ -803,8 +803,9 @@ async function existenceMap() {
                   .join(", ") : "no orbit") : "";
     });
     const done = lines[lines.length - 1];
-    status("map", "map: " + done.with_orbits + " of " + done.cells + " cells with a " + f.kind.value +
-           " orbit of period at most " + f.max_period.value + ", " + done.seconds.toFixed(2) + " s");
+    status("map", "map: " + done.with_orbits + " of " + done.cells + " cells with orbits (kind " +
+           f.kind.value + ", period at most " + f.max_period.value + "), " +
+           done.seconds.toFixed(2) + " s");
   });
 }
 

@@ -42,6 +42,7 @@ const browser = await puppeteer.launch({
   args: ["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"],
 });
 const t00 = Date.now();
+let downloads = null;
 try {
   const page = await browser.newPage();
   await page.setViewport({ width: 1400, height: 1300 });
@@ -50,7 +51,7 @@ try {
   page.on("pageerror", (e) => consoleErrors.push(e.message));
   page.on("requestfailed", (r) => failed.push(r.url()));
   page.on("response", (r) => r.status() >= 400 && problems.push(r.status() + " " + r.url()));
-  const downloads = fs.mkdtempSync(path.join(out, "downloads-"));
+  downloads = fs.mkdtempSync(path.join(out, "downloads-"));
   const cdp = await browser.target().createCDPSession();
   await cdp.send("Browser.setDownloadBehavior", { behavior: "allow", downloadPath: downloads,
                                                   eventsEnabled: true });
@@ -381,6 +382,8 @@ try {
               Math.round((Date.now() - t00) / 1000) + " s");
 } finally {
   await browser.close();
+  if (downloads)
+    fs.rmSync(downloads, { recursive: true, force: true });
 }
 console.log(checks + " checks, " + failures.length + " failures");
 process.exit(failures.length ? 1 : 0);
