@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """The README's pictures, from a running stickslipd's answers.
 
   python3 scripts/figures.py [URL] [OUT_DIR]
@@ -12,14 +11,22 @@ white none, light grey unstable, dark grey stable, black two or more.
 basins.png: POST /basins of the paper's set over x1 in [-2, 4] (across)
 and x2 in [0, 8] (up) with x1' = 0, x2' = V, 256x256 cells: light the
 overshoot orbit's basin, dark the period-3 orbit's, red unresolved.
-Only the Python standard library is used.
+Each with its axes, ticks, units and a legend, drawn by matplotlib
+(Debian's python3-matplotlib; scripts/setup.sh --test installs it).
 """
 import base64
 import json
-import struct
 import sys
 import urllib.request
-import zlib
+
+try:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+except ImportError:
+    sys.exit("figures.py needs matplotlib: apt-get install python3-matplotlib")
 
 URL = sys.argv[1] if len(sys.argv) > 1 else "http://127.0.0.1:8080"
 OUT = sys.argv[2] if len(sys.argv) > 2 else "bench/results"
@@ -34,20 +41,23 @@ def post(path, body):
         return r.read().decode()
 
 
-def png(path, rows, k=1):
-    """rows: top to bottom, each a list of (r, g, b); each pixel k x k."""
-    rows = [[px for px in row for _ in range(k)] for row in rows for _ in
-            range(k)]
-    h, w = len(rows), len(rows[0])
-    raw = b"".join(b"\0" + bytes(c for px in row for c in px) for row in rows)
-
-    def chunk(kind, data):
-        return (struct.pack(">I", len(data)) + kind + data +
-                struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
-    with open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" +
-                chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)) +
-                chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
+def picture(path, grid, colours, names, extent, xlabel, ylabel, title):
+    """grid: rows bottom to top of indices into colours; a legend of the
+    indices present, named by names."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.8), dpi=110)
+    ax.imshow(grid, origin="lower", extent=extent, aspect="auto",
+              interpolation="nearest", cmap=ListedColormap(colours),
+              vmin=0, vmax=len(colours) - 1)
+    present = sorted({k for row in grid for k in row})
+    ax.legend(handles=[Patch(facecolor=colours[k], edgecolor="0.5",
+                             label=names[k]) for k in present],
+              loc="upper left", bbox_to_anchor=(1.01, 1), borderaxespad=0,
+              frameon=False)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    fig.savefig(path, bbox_inches="tight")
+    plt.close(fig)
 
 
 def existence_map(n=100):
@@ -58,7 +68,7 @@ def existence_map(n=100):
                  {"parameter": "ur", "from": 1.5 * us, "to": 15 * us,
                   "n": n}],
         "fields": ["stable"]})
-    grid = [[(255, 255, 255)] * n for _ in range(n)]
+    grid = [[0] * n for _ in range(n)]
     done = None
     for line in text.splitlines():
         cell = json.loads(line)
@@ -67,11 +77,15 @@ def existence_map(n=100):
             continue
         i, j = cell["index"]
         orbits = cell["orbits"]
-        colour = ((255, 255, 255) if not orbits else
-                  (0, 0, 0) if len(orbits) > 1 else
-                  (70, 70, 70) if orbits[0]["stable"] else (190, 190, 190))
-        grid[n - 1 - i][j] = colour  # chi up
-    png(OUT + "/existence_map.png", grid, 3)
+        grid[i][j] = (0 if not orbits else 3 if len(orbits) > 1 else
+                      2 if orbits[0]["stable"] else 1)  # row i: chi, up
+    h, w = 0.92 / (2 * (n - 1)), 13.5 / (2 * (n - 1))
+    picture(OUT + "/existence_map.png", grid,
+            ["#ffffff", "#bebebe", "#464646", "#000000"],
+            ["no overshoot orbit", "unstable", "stable", "two or more"],
+            [1.5 - w, 15 + w, 0.04 - h, 0.96 + h], "ur / us (dimensionless)",
+            "chi (dimensionless)",
+            "overshoot orbits of period 1: eta 4, us 0.0724, V 1")
     return done
 
 
@@ -82,16 +96,24 @@ def basins(n=256):
                  {"variable": "x2", "from": 0, "to": 8, "n": n}],
         "state": {"v1": 0, "v2": 1}}))
     labels = base64.b64decode(ans["labels"]["data"])
-    shade = {}
+    colours = ["#dc1e1e"]
+    names = ["unresolved"]
+    index = {}
     for a in ans["attractors"]:
-        shade[a["label"]] = ((225, 225, 225) if a["n_turns"] == 1 else
-                             (40, 40, 40) if a["n_turns"] == 3 else
-                             (120, 120, 200))
-    rows = []
-    for j in range(n - 1, -1, -1):  # x2 up
-        rows.append([shade.get(labels[i * n + j], (220, 30, 30))
-                     for i in range(n)])  # x1 across
-    png(OUT + "/basins.png", rows)
+        index[a["label"]] = len(colours)
+        colours.append("#e1e1e1" if a["n_turns"] == 1 else
+                       "#282828" if a["n_turns"] == 3 else "#7878c8")
+        names.append("%s, %d turn%s, T = %.4f: %.1f %%" % (
+            a["kind"], a["n_turns"], "s" if a["n_turns"] > 1 else "",
+            a["period"], 100 * a["fraction"]))
+    # row j of the picture: x2, up; column i: x1, across
+    grid = [[index.get(labels[i * n + j], 0) for i in range(n)]
+            for j in range(n)]
+    h, w = 8 / (2 * (n - 1)), 6 / (2 * (n - 1))
+    picture(OUT + "/basins.png", grid, colours, names,
+            [-2 - w, 4 + w, -h, 8 + h], "x1 (dimensionless)",
+            "x2 (dimensionless)",
+            "basins of the paper's set, x1' = 0, x2' = V = 1")
     return ans
 
 

@@ -14,6 +14,8 @@
 #                     tests/typescript), those from the npm registry;
 #                     and PostgreSQL's server, for a throwaway cluster
 #                     the job store's tests run on (pg-throwaway.sh);
+#                     python3-matplotlib for the README's figures
+#                     (scripts/figures.py);
 #                     without them those tests are skipped, so as another
 #                     user their absence is only said
 set -euo pipefail
@@ -22,6 +24,7 @@ pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-d
 extras=()
 if [ "${1:-}" = --test ]; then
   extras=(prometheus nginx python3 python3-jsonschema systemd chromium postgresql)
+  extras+=(python3-matplotlib)
   command -v npm >/dev/null || extras+=(nodejs npm)
   # the Python client's tests and notebooks (python/, notebooks/)
   extras+=(python3-pytest mypy python3-numpy python3-pandas python3-matplotlib
@@ -40,7 +43,8 @@ lint_tools() {
     (cd api/lint && npm ci --no-audit --no-fund --ignore-scripts --loglevel=error)
   fi
   if [ "${1:-}" = --test ] && command -v npm >/dev/null &&
-    [ ! -d tests/browser/node_modules/puppeteer-core ]; then
+    { [ ! -d tests/browser/node_modules/puppeteer-core ] ||
+      [ ! -d tests/browser/node_modules/axe-core ]; }; then
     (cd tests/browser && PUPPETEER_SKIP_DOWNLOAD=1 npm ci --no-audit --no-fund \
       --ignore-scripts --loglevel=error)
   fi

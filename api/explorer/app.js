@@ -1,62 +1,134 @@
 /*
- * The stickslip explorer: plain JavaScript drawing plain SVG.
+ * The stickslip explorer: the page's state, its calls to the daemon, and
+ * its figures (drawn by Plot, plot.js, embedded ahead of this file).
  *
- * No plotting library: what the page draws (polylines, a grid of cells,
- * axes with a few ticks) is a few hundred lines of SVG, so there is nothing
- * to vendor, pin or license, and the page works with no network.  It asks
- * the daemon (its own origin, or ?api=URL for another daemon that allows
- * this origin with --cors-origin) for curves sampled to half a pixel of its
- * own plots (samples.tolerance with per-axis scales in data units per
- * pixel) and for only the columns it draws (samples.fields).
+ * It asks the daemon (its own origin, or ?api=URL for another daemon that
+ * allows this origin with --cors-origin) for curves sampled to half a
+ * pixel of its own plots (samples.tolerance with per-axis scales in data
+ * units per pixel) and for only the columns it draws (samples.fields).
+ * Maps and basins run as jobs (Prefer: respond-async) with progress and
+ * cancel; a daemon that answers them at once is read the same way.  The
+ * view lives in the URL (the contract's field names), so that it can be
+ * shared and the browser's back button returns to the previous one.
  */
 "use strict";
 
 const API = new URLSearchParams(location.search).get("api") || "";
-const SVGNS = "http://www.w3.org/2000/svg";
 const DASH = { overshoot: "", stick: "7 4", slip: "1.5 3" };
-const COLORS = ["#1f5fa8", "#c2410c", "#15803d", "#7e22ce", "#b91c1c",
-                "#0e7490", "#a16207", "#be185d"];
-const PAD = { left: 48, right: 12, top: 12, bottom: 30 };
+/* orbit colours, told apart in print (Tableau's ten, less the grey and olive) */
+const COLORS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                "#8c564b", "#e377c2", "#17becf"];
+const PARAMS = {
+  dimensionless: ["chi", "eta", "us", "ur", "V"],
+  physical: ["m1", "m2", "k1", "k2", "Fs", "Fr", "v0"],
+};
+/* the unit of each parameter in physical units (M, L: the request's mass
+ * and length units; s: its time unit) */
+const PUNIT = { m1: "M", m2: "M", k1: "M/s²", k2: "M/s²", Fs: "M L/s²", Fr: "M L/s²", v0: "L/s" };
 
-const state = { orbits: [], selected: 0, params: null, units: null };
+const $ = (sel, root) => (root || document).querySelector(sel);
+const state = { orbits: [], selected: 0, hidden: new Set(), params: null, units: null,
+                frames: null, open: new Set(), figures: {} };
 
 /* ---- talking to the daemon ---------------------------------------------- */
 
 /* A problem from the daemon, in words: its title, detail and field. */
 class Problem extends Error {
   constructor(status, body) {
-    const where = body && (body.pointer || body.field);
     super((body && body.detail) || (body && body.title) || "HTTP " + status);
     this.status = status;
-    this.where = where || "";
+    this.where = (body && (body.pointer || body.field)) || "";
     this.title = (body && body.title) || "";
   }
 }
 
-async function post(path, body, ndjson) {
-  let res;
+/* fetch, with a failure to connect explained: from another origin it is
+ * most often a daemon started without --cors-origin for this page. */
+async function call(path, opts) {
+  const url = /^https?:/.test(path) ? path : API + path;
   try {
-    res = await fetch(API + path, {
-      method: "POST",
-      headers: { "Content-Type": "application/json" },
-      body: JSON.stringify(body),
-    });
+    return await fetch(url, opts);
   } catch (e) {
-    throw new Problem(0, { detail: "the daemon could not be reached (" + e.message + ")" });
+    const target = API || location.origin;
+    const other = API && new URL(API, location.href).origin !== location.origin;
+    throw new Problem(0, {
+      title: "Cannot reach the daemon",
+      detail: other
+        ? "the browser could not read " + target + " (" + e.message + "): it is down, or it " +
+          "does not allow this page's origin. Start it with --cors-origin " + location.origin +
+          " (or STICKSLIP_CORS_ORIGIN=" + location.origin + ")."
+        : target + " could not be reached (" + e.message + "): is the daemon running?",
+    });
   }
-  const text = await res.text();
-  if (!res.ok) {
-    let problem = null;
-    try { problem = JSON.parse(text); } catch (e) { /* not JSON */ }
-    throw new Problem(res.status, problem || { detail: text.slice(0, 300) });
-  }
-  if (ndjson)
-    return text.split("\n").filter((l) => l.trim()).map((l) => JSON.parse(l));
-  return JSON.parse(text);
 }
 
-function showError(e) {
-  const box = document.getElementById("error");
+async function failure(res) {
+  const text = await res.text();
+  let problem = null;
+  try { problem = JSON.parse(text); } catch (e) { /* not JSON */ }
+  return new Problem(res.status, problem || { detail: text.slice(0, 300) });
+}
+
+async function post(path, body) {
+  const res = await call(path, {
+    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body),
+  });
+  if (!res.ok)
+    throw await failure(res);
+  return res.json();
+}
+
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+class Cancelled extends Error {}
+
+/* A long computation as a job: POST with Prefer: respond-async, the status
+ * polled for its progress (progress(status) each time), the job deleted
+ * when ctl.cancelled is set, and its results read when it succeeds.  A
+ * daemon that answers at once (200) is taken as it answers. */
+async function job(path, body, ctl, progress) {
+  const res = await call(path, {
+    method: "POST",
+    headers: { "Content-Type": "application/json", Prefer: "respond-async" },
+    body: JSON.stringify(body),
+  });
+  if (res.status === 200)
+    return res.text();
+  if (res.status !== 201)
+    throw await failure(res);
+  const loc = res.headers.get("Location");
+  let st = await res.json();
+  ctl.location = loc;
+  for (;;) {
+    progress(st);
+    if (ctl.cancelled) {
+      await call(loc, { method: "DELETE" });
+      throw new Cancelled();
+    }
+    if (st.status === "successful" || st.status === "failed" || st.status === "dismissed")
+      break;
+    await sleep(250);
+    const r = await call(loc);
+    if (!r.ok)
+      throw await failure(r);
+    st = await r.json();
+  }
+  if (st.status === "dismissed")
+    throw new Cancelled();
+  const r = await call(loc + "/results");
+  if (!r.ok)
+    throw await failure(r);
+  return r.text();
+}
+
+/* ---- panels: their errors, status, staleness ----------------------------- */
+
+function panelOf(id) {
+  return id === "orbits" ? { error: $("#error"), status: $("#status") }
+    : { error: $("#" + id + "-panel .error"), status: $("#" + id + "-panel .status") };
+}
+
+function showError(panel, e) {
+  const box = panelOf(panel).error;
   box.textContent = "";
   const strong = document.createElement("strong");
   strong.textContent = e.title ? e.title + ": " : "Error: ";
@@ -70,161 +142,213 @@ function showError(e) {
   box.hidden = false;
 }
 
-function clearError() {
-  const box = document.getElementById("error");
+function clearError(panel) {
+  const box = panelOf(panel).error;
   box.hidden = true;
   box.textContent = "";
 }
 
-function status(text) {
-  document.getElementById("status").textContent = text;
+function status(panel, text) {
+  panelOf(panel).status.textContent = text;
 }
 
-/* ---- the parameters ----------------------------------------------------- */
+/* Figures computed under parameters or units no longer in the form: each
+ * is marked stale (faded, said in its panel) until computed again. */
+function markStale() {
+  for (const svg of document.querySelectorAll("svg.plot"))
+    if (svg.childNodes.length)
+      svg.classList.add("stale");
+  for (const id of ["family", "map", "basins"])
+    if ($("#" + id).childNodes.length)
+      status(id, "stale: computed under other parameters or units; run again");
+  if (state.orbits.length)
+    status("orbits", "stale: the parameters changed; Find orbits again");
+}
+
+/* ---- the parameters and their units -------------------------------------- */
+
+function units() {
+  return $("#units").value;
+}
 
 function readParams() {
-  const units = document.getElementById("units").value;
-  const group = document.getElementById(units);
   const out = {};
-  for (const input of group.querySelectorAll("input")) {
+  for (const input of $("#" + units()).querySelectorAll("input")) {
     const v = Number(input.value);
     /* sent as typed when not a number: the daemon says what is wrong */
     out[input.name] = input.value.trim() === "" || isNaN(v) ? input.value : v;
   }
-  return units === "physical" ? { physical: out } : { params: out };
+  return units() === "physical" ? { physical: out } : { params: out };
 }
 
-/* ---- SVG plots ------------------------------------------------------------ */
-
-function el(name, attrs, parent) {
-  const e = document.createElementNS(SVGNS, name);
-  for (const k in attrs)
-    e.setAttribute(k, attrs[k]);
-  if (parent)
-    parent.appendChild(e);
-  return e;
+function paramValues() {
+  return state.params && (state.params.params || state.params.physical);
 }
 
-function niceTicks(lo, hi, n) {
-  const span = hi - lo || 1;
-  const step0 = span / n, mag = Math.pow(10, Math.floor(Math.log10(step0)));
-  const step = [1, 2, 5, 10].map((m) => m * mag).find((s) => s >= step0);
-  const ticks = [];
-  for (let t = Math.ceil(lo / step) * step; t <= hi + 1e-12 * span; t += step)
-    ticks.push(Math.abs(t) < 1e-12 * span ? 0 : t);
-  return ticks;
+/* An axis label: the quantity and its unit in the answer's units. */
+function label(q, kind) {
+  const phys = state.units === "physical";
+  if (kind === "param")
+    return q + (phys && PUNIT[q] ? " (" + PUNIT[q] + ")" : " (dimensionless)");
+  const u = { x: "L", v: "L/s", t: "s" }[kind];
+  return q + (phys ? " (" + u + ")" : " (dimensionless)");
 }
 
-/* A plot: the svg, its data ranges, and the maps to pixels. */
-function frame(svg, xr, yr, xlabel, ylabel, exact) {
-  svg.textContent = "";
-  const w = Number(svg.getAttribute("width")), h = Number(svg.getAttribute("height"));
-  const pw = w - PAD.left - PAD.right, ph = h - PAD.top - PAD.bottom;
-  const pad = (r) => {
-    const d = (r[1] - r[0]) || Math.abs(r[0]) || 1;
-    return [r[0] - 0.05 * d, r[1] + 0.05 * d];
+function fillSelect(select, names, keep) {
+  const was = select.value;
+  select.textContent = "";
+  for (const n of names) {
+    const o = document.createElement("option");
+    o.textContent = n;
+    select.appendChild(o);
+  }
+  if (keep && names.includes(was))
+    select.value = was;
+}
+
+/* The parameter choices and default ranges of the family and the map for
+ * the form's units. */
+function setUnits(u, defaults) {
+  $("#units").value = u;
+  $("#dimensionless").hidden = u !== "dimensionless";
+  $("#physical").hidden = u !== "physical";
+  const c = $("#continue-form"), m = $("#map-form");
+  fillSelect(c.parameter, PARAMS[u], !defaults);
+  fillSelect(m.xp, PARAMS[u], !defaults);
+  fillSelect(m.yp, PARAMS[u], !defaults);
+  if (!defaults)
+    return;
+  const v = {};
+  for (const input of $("#" + u).querySelectorAll("input"))
+    v[input.name] = Number(input.value);
+  const r = (x) => +x.toPrecision(3);
+  if (u === "dimensionless") {
+    c.parameter.value = "ur";
+    m.xp.value = "ur";
+    m.xfrom.value = r(1.5 * v.us);
+    m.xto.value = r(15 * v.us);
+    m.yp.value = "chi";
+    m.yfrom.value = 0.04;
+    m.yto.value = 0.96;
+  } else {
+    c.parameter.value = "Fr";
+    m.xp.value = "Fr";
+    m.xfrom.value = r(1.5 * v.Fs);
+    m.xto.value = r(15 * v.Fs);
+    m.yp.value = "k2";
+    m.yfrom.value = r(0.05 * v.k1);
+    m.yto.value = r(2 * v.k1);
+  }
+  familyRange();
+}
+
+/* The family's default range about the current value of its parameter. */
+function familyRange() {
+  const c = $("#continue-form"), input = $("#" + units() + " input[name=" + c.parameter.value + "]");
+  const v = Number(input && input.value);
+  if (!(v > 0))
+    return;
+  c.from.value = +(v / 2).toPrecision(3);
+  c.to.value = +(v * 2.4).toPrecision(3);
+}
+
+/* ---- the view in the URL ----------------------------------------------- */
+
+/* Forms whose fields the URL keeps, and their prefixes there. */
+const FORMS = [["continue-form", "c."], ["map-form", "m."], ["basins-form", "b."]];
+
+function viewURL() {
+  const q = new URLSearchParams();
+  if (API)
+    q.set("api", API);
+  q.set("units", units());
+  for (const input of $("#" + units()).querySelectorAll("input"))
+    q.set(input.name, input.value);
+  const f = $("#params");
+  q.set("kind", f.kind.value);
+  q.set("max_period", f.max_period.value);
+  q.set("selected", state.selected);
+  if (state.hidden.size)
+    q.set("hidden", [...state.hidden].join(","));
+  if (state.open.size)
+    q.set("open", [...state.open].join(","));
+  for (const [id, pre] of FORMS)
+    for (const e of $("#" + id).elements)
+      if (e.name)
+        q.set(pre + e.name, e.value);
+  return "?" + q.toString();
+}
+
+function remember(replace) {
+  const url = viewURL();
+  if (url === location.search)
+    return;
+  if (replace)
+    history.replaceState(null, "", url);
+  else
+    history.pushState(null, "", url);
+}
+
+/* Sets the forms from the URL; returns what it asks to show. */
+function readURL() {
+  const q = new URLSearchParams(location.search);
+  const u = q.get("units") === "physical" ? "physical" : "dimensionless";
+  for (const input of $("#" + u).querySelectorAll("input"))
+    if (q.has(input.name))
+      input.value = q.get(input.name);
+  setUnits(u, true);
+  const f = $("#params");
+  if (q.has("kind"))
+    f.kind.value = q.get("kind");
+  if (q.has("max_period"))
+    f.max_period.value = q.get("max_period");
+  for (const [id, pre] of FORMS)
+    for (const e of $("#" + id).elements)
+      if (e.name && q.has(pre + e.name))
+        e.value = q.get(pre + e.name);
+  return {
+    selected: Number(q.get("selected")) || 0,
+    hidden: new Set((q.get("hidden") || "").split(",").filter((s) => s !== "").map(Number)),
+    open: (q.get("open") || "").split(",").filter((s) => ["family", "map", "basins"].includes(s)),
   };
-  if (!exact) {
-    xr = pad(xr);
-    yr = pad(yr);
-  }
-  const p = {
-    svg, xr, yr, pw, ph,
-    x: (v) => PAD.left + (v - xr[0]) / (xr[1] - xr[0]) * pw,
-    y: (v) => PAD.top + (yr[1] - v) / (yr[1] - yr[0]) * ph,
-    /* data units per pixel, for samples.scale */
-    sx: (xr[1] - xr[0]) / pw,
-    sy: (yr[1] - yr[0]) / ph,
-  };
-  const axes = el("g", { class: "axes" }, svg);
-  el("rect", { x: PAD.left, y: PAD.top, width: pw, height: ph, class: "box" }, axes);
-  for (const t of niceTicks(xr[0], xr[1], 6)) {
-    el("line", { x1: p.x(t), x2: p.x(t), y1: PAD.top + ph, y2: PAD.top + ph + 4 }, axes);
-    el("text", { x: p.x(t), y: PAD.top + ph + 16, "text-anchor": "middle" }, axes)
-      .textContent = +t.toPrecision(4);
-  }
-  for (const t of niceTicks(yr[0], yr[1], 5)) {
-    el("line", { x1: PAD.left - 4, x2: PAD.left, y1: p.y(t), y2: p.y(t) }, axes);
-    el("text", { x: PAD.left - 6, y: p.y(t) + 4, "text-anchor": "end" }, axes)
-      .textContent = +t.toPrecision(4);
-  }
-  el("text", { x: PAD.left + pw / 2, y: h - 2, "text-anchor": "middle", class: "label" }, axes)
-    .textContent = xlabel;
-  el("text", { x: 12, y: PAD.top + ph / 2, "text-anchor": "middle", class: "label",
-               transform: "rotate(-90 12 " + (PAD.top + ph / 2) + ")" }, axes)
-    .textContent = ylabel;
-  p.layer = el("g", { class: "data" }, svg);
-  return p;
-}
-
-/* Polylines of (xs, ys), split where mode changes, styled as the paper's
- * figures; returns the number of segments drawn. */
-function drawModes(p, xs, ys, modes, color, cls) {
-  let start = 0, segments = 0;
-  for (let i = 1; i <= xs.length; i++) {
-    if (i < xs.length && modes[i] === modes[start])
-      continue;
-    const pts = [];
-    for (let k = start; k < i; k++)
-      pts.push(p.x(xs[k]).toFixed(2) + "," + p.y(ys[k]).toFixed(2));
-    if (pts.length > 1) {
-      el("polyline", {
-        points: pts.join(" "), fill: "none", stroke: color,
-        "stroke-width": modes[start] === "overshoot" ? 2 : 1.6,
-        "stroke-dasharray": DASH[modes[start]] || "",
-        class: cls || "curve", "data-mode": modes[start],
-      }, p.layer);
-      segments++;
-    }
-    start = i;
-  }
-  return segments;
-}
-
-function range(arrays) {
-  let lo = Infinity, hi = -Infinity;
-  for (const a of arrays)
-    for (const v of a) {
-      if (v < lo) lo = v;
-      if (v > hi) hi = v;
-    }
-  return [lo, hi];
 }
 
 /* ---- orbits --------------------------------------------------------------- */
 
 const PORTRAIT_FIELDS = ["t", "x1", "x2", "v1", "v2", "mode", "F1", "F2"];
+const color = (i) => COLORS[i % COLORS.length];
 
 /* The plots' ranges from a first, coarse pass; then the orbits again,
  * sampled to half a pixel of those plots. */
-async function findOrbits() {
-  clearError();
+async function findOrbits(view) {
+  clearError("orbits");
   const base = readParams();
-  const form = document.getElementById("params");
+  const form = $("#params");
   const body = Object.assign({}, base, {
     kind: form.kind.value,
     max_period: Number(form.max_period.value),
     samples: { tolerance: 0.05, fields: ["x1", "x2", "v1", "v2"] },
   });
-  status("searching...");
+  status("orbits", "searching...");
+  $("#find").disabled = true;
   const t0 = performance.now();
   try {
     const first = await post("/orbit", body);
     state.params = base;
     state.units = first.units;
+    state.orbits = [];
+    state.selected = 0;
+    state.hidden = new Set();
     if (!first.orbits.length) {
-      state.orbits = [];
       listOrbits();
       clearPlots();
-      status("no orbit: " + (first.reason || "none found"));
+      status("orbits", "no orbit: " + (first.reason || "none found"));
       return;
     }
     const s = first.orbits.map((o) => o.samples);
-    const r2 = frame(document.getElementById("portrait2"),
-                     range(s.map((q) => q.x2)), range(s.map((q) => q.v2)), "x2", "x2'");
-    const r1 = frame(document.getElementById("portrait1"),
-                     range(s.map((q) => q.x1)), range(s.map((q) => q.v1)), "x1", "x1'");
-    state.frames = { r1, r2 };
+    framePortraits([Plot.extent(s.map((q) => q.x1)), Plot.extent(s.map((q) => q.v1))],
+                   [Plot.extent(s.map((q) => q.x2)), Plot.extent(s.map((q) => q.v2))], false);
+    const { r1, r2 } = state.frames;
     /* half a pixel in both portraits */
     body.samples = {
       tolerance: 0.5,
@@ -233,31 +357,82 @@ async function findOrbits() {
     };
     const answer = await post("/orbit", body);
     state.orbits = answer.orbits;
-    state.selected = 0;
+    if (view) {
+      state.selected = view.selected < answer.orbits.length ? view.selected : 0;
+      state.hidden = new Set([...view.hidden].filter((i) => i < answer.orbits.length));
+    }
     listOrbits();
     drawOrbits();
     const n = answer.orbits.reduce((k, o) => k + (o.samples ? o.samples.t.length : 0), 0);
-    status(answer.orbits.length + " orbit(s), " + n + " points drawn, in " +
+    status("orbits", answer.orbits.length + " orbit(s), " + n + " points drawn, in " +
            Math.round(performance.now() - t0) + " ms");
   } catch (e) {
-    status("");
-    showError(e);
+    status("orbits", "");
+    state.orbits = [];
+    listOrbits();
+    clearPlots();
+    showError("orbits", e);
+  } finally {
+    $("#find").disabled = false;
   }
 }
 
 function clearPlots() {
   for (const id of ["portrait1", "portrait2", "constraints", "multipliers"])
-    document.getElementById(id).textContent = "";
+    $("#" + id).textContent = "";
+  state.frames = null;
+}
+
+function framePortraits(w1, w2, exact) {
+  const mk = (id, r, n) => Plot.frame($("#" + id), {
+    x: r[0], y: r[1], exact, side: 150, xlabel: label("x" + n, "x"), ylabel: label("x" + n + "'", "v"),
+    xname: "x" + n, yname: "x" + n + "'",
+  });
+  state.frames = { r1: mk("portrait1", w1, 1), r2: mk("portrait2", w2, 2) };
+  if (!exact)
+    state.home = { r1: [state.frames.r1.xr, state.frames.r1.yr],
+                   r2: [state.frames.r2.xr, state.frames.r2.yr] };
+}
+
+function selectOrbit(i) {
+  state.selected = i;
+  listOrbits();
+  drawOrbits();
+  remember();
+}
+
+function toggleOrbit(i) {
+  if (state.hidden.has(i))
+    state.hidden.delete(i);
+  else
+    state.hidden.add(i);
+  listOrbits();
+  drawOrbits();
+  remember();
 }
 
 function listOrbits() {
-  const tbody = document.querySelector("#orbits tbody");
+  const tbody = $("#orbits tbody");
   tbody.textContent = "";
   state.orbits.forEach((o, i) => {
     const tr = document.createElement("tr");
     tr.dataset.index = i;
+    tr.tabIndex = 0;
+    tr.setAttribute("aria-selected", i === state.selected);
     if (i === state.selected)
       tr.className = "selected";
+    const show = document.createElement("td");
+    const box = document.createElement("input");
+    box.type = "checkbox";
+    box.checked = !state.hidden.has(i);
+    box.setAttribute("aria-label", "show orbit " + i);
+    box.addEventListener("click", (e) => e.stopPropagation());
+    box.addEventListener("change", () => toggleOrbit(i));
+    const sw = document.createElement("span");
+    sw.className = "swatch";
+    sw.style.setProperty("--swatch", color(i));
+    show.append(box, sw);
+    tr.appendChild(show);
     const phases = o.phases.map((p) => p.mode + " " + p.duration.toFixed(4)).join(", ");
     const st = o.stability;
     const cells = [i, o.kind + (o.n_turns > 1 ? " (" + o.n_turns + " turns)" : ""),
@@ -269,34 +444,80 @@ function listOrbits() {
       td.textContent = c;
       tr.appendChild(td);
     }
-    tr.addEventListener("click", () => {
-      state.selected = i;
-      listOrbits();
-      drawOrbits();
+    tr.addEventListener("click", () => selectOrbit(i));
+    tr.addEventListener("keydown", (e) => {
+      if (e.target !== tr)
+        return;
+      if (e.key === "Enter" || e.key === " ") {
+        e.preventDefault();
+        selectOrbit(i);
+        $("#orbits tbody tr[data-index='" + i + "']").focus();
+      } else if (e.key === "ArrowDown" || e.key === "ArrowUp") {
+        e.preventDefault();
+        const next = tr[e.key === "ArrowDown" ? "nextElementSibling" : "previousElementSibling"];
+        if (next)
+          next.focus();
+      }
     });
     tbody.appendChild(tr);
   });
+  const o = state.orbits[state.selected], f = $("#simulate-form");
+  if (o)
+    ["x1", "x2", "v1", "v2"].forEach((k, j) => { f[k].value = +o.x0[j].toPrecision(6); });
+}
+
+/* The orbits' table as a figure's data: one row a sample. */
+function orbitTable(cols) {
+  const rows = [];
+  state.orbits.forEach((o, i) => {
+    if (state.hidden.has(i) || !o.samples)
+      return;
+    for (let k = 0; k < o.samples.t.length; k++)
+      rows.push([i, ...cols.map((c) => o.samples[c][k])]);
+  });
+  return { columns: ["orbit", ...cols], rows };
 }
 
 function drawOrbits() {
+  if (!state.frames)
+    return;
   const { r1, r2 } = state.frames;
-  r1.layer.textContent = "";
-  r2.layer.textContent = "";
-  state.orbits.forEach((o, i) => {
-    if (!o.samples)
-      return;
-    const s = o.samples, color = COLORS[i % COLORS.length];
-    const cls = i === state.selected ? "curve selected" : "curve";
-    drawModes(r2, s.x2, s.v2, s.mode, color, cls);
-    drawModes(r1, s.x1, s.v1, s.mode, color, cls);
-  });
+  const style = (m) => ({ dash: DASH[m] || "", width: m === "overshoot" ? 2 : 1.6 });
+  for (const [p, n] of [[r1, 1], [r2, 2]]) {
+    p.layer.textContent = "";
+    p.top.textContent = "";
+    state.orbits.forEach((o, i) => {
+      if (!o.samples || state.hidden.has(i))
+        return;
+      const sel = i === state.selected;
+      Plot.lines(p, o.samples["x" + n], o.samples["v" + n], o.samples.mode, color(i),
+                 { class: sel ? "curve selected" : "curve", "data-orbit": i,
+                   "stroke-opacity": sel ? 1 : 0.55 }, style);
+    });
+    const entries = state.orbits.map((o, i) => ({
+      label: "#" + i + " " + o.kind + " " + o.period.toFixed(3), color: color(i),
+      off: state.hidden.has(i) }));
+    for (const m of ["slip", "overshoot", "stick"])
+      entries.push({ label: m, color: "#555", dash: DASH[m] });
+    Plot.legend(p, entries, (k) => k < state.orbits.length && toggleOrbit(k));
+    Plot.readout(p);
+    Plot.zoom(p, (xr, yr) => {
+      const keep = state.frames;
+      const q = Plot.frame(p.svg, { x: xr, y: yr, exact: true, side: 150, xlabel: label("x" + n, "x"),
+                                    ylabel: label("x" + n + "'", "v"), xname: "x" + n,
+                                    yname: "x" + n + "'" });
+      state.frames = n === 1 ? { r1: q, r2: keep.r2 } : { r1: keep.r1, r2: q };
+      drawOrbits();
+    }, state.home["r" + n]);
+    state.figures["portrait" + n] = () => orbitTable(["t", "x" + n, "v" + n, "mode"]);
+  }
   drawConstraints();
   drawMultipliers();
 }
 
 /* F1 and F2 over the stick phases of the selected orbit (Fig. 4). */
 function drawConstraints() {
-  const svg = document.getElementById("constraints");
+  const svg = $("#constraints");
   const o = state.orbits[state.selected];
   if (!o || !o.samples) {
     svg.textContent = "";
@@ -309,60 +530,72 @@ function drawConstraints() {
       f1.push(s.F1[i]);
       f2.push(s.F2[i]);
     }
+  state.figures.constraints = () => ({ columns: ["t", "F1", "F2"],
+                                       rows: ts.map((t, i) => [t, f1[i], f2[i]]) });
   if (!ts.length) {
-    frame(svg, [0, 1], [-1, 1], "t (no stick)", "F");
+    Plot.frame(svg, { x: [0, 1], y: [-1, 1], xlabel: label("t", "t") + ": no stick",
+                      ylabel: "F1, F2" });
     return;
   }
-  const p = frame(svg, range([ts]), range([f1, f2, [0]]), "t", "F1, F2");
-  el("line", { x1: PAD.left, x2: PAD.left + p.pw, y1: p.y(0), y2: p.y(0), class: "zero" }, p.layer);
+  const p = Plot.frame(svg, { x: Plot.extent([ts]), y: Plot.extent([f1, f2, [0]]),
+                              xlabel: label("t", "t"), ylabel: "F1, F2 (dimensionless)",
+                              xname: "t", yname: "F" });
+  Plot.el("line", { x1: p.pad.left, x2: p.pad.left + p.pw, y1: p.y(0), y2: p.y(0),
+                    stroke: "#5b6570", "stroke-width": 0.8 }, p.layer);
   const draw = (ys, dash, name) => {
     const pts = ts.map((t, i) => p.x(t).toFixed(2) + "," + p.y(ys[i]).toFixed(2));
-    el("polyline", { points: pts.join(" "), fill: "none", stroke: "#1f5fa8",
-                     "stroke-width": 1.6, "stroke-dasharray": dash, class: "constraint",
-                     "data-name": name }, p.layer);
+    Plot.el("polyline", { points: pts.join(" "), fill: "none", stroke: color(state.selected),
+                          "stroke-width": 1.6, "stroke-dasharray": dash, class: "constraint",
+                          "data-name": name }, p.layer);
   };
   draw(f1, "", "F1");
   draw(f2, "6 4", "F2");
+  Plot.legend(p, [{ label: "F1 > 0", color: color(state.selected) },
+                  { label: "F2 <= 0", color: color(state.selected), dash: "6 4" }], null, "left");
+  Plot.readout(p);
 }
 
 /* The multipliers of the selected orbit against the unit circle. */
 function drawMultipliers() {
-  const svg = document.getElementById("multipliers");
+  const svg = $("#multipliers");
   const o = state.orbits[state.selected];
   svg.textContent = "";
   if (!o)
     return;
   const ev = o.stability.eigenvalues;
+  state.figures.multipliers = () => ({
+    columns: ["re", "im", "modulus"], rows: ev.map((e) => [e[0], e[1], Math.hypot(e[0], e[1])]) });
   const m = Math.max(1.2, ...ev.map((e) => Math.hypot(e[0], e[1]) * 1.1));
-  const p = frame(svg, [-m, m], [-m, m], "Re", "Im");
-  el("circle", { cx: p.x(0), cy: p.y(0), r: p.x(1) - p.x(0), class: "unit" }, p.layer);
+  const p = Plot.frame(svg, { x: [-m, m], y: [-m, m], exact: true, xlabel: "Re (dimensionless)",
+                              ylabel: "Im (dimensionless)", xname: "Re", yname: "Im" });
+  Plot.el("circle", { cx: p.x(0), cy: p.y(0), r: p.x(1) - p.x(0), fill: "none", stroke: "#5b6570",
+                      "stroke-dasharray": "3 3" }, p.layer);
   for (const e of ev)
-    el("circle", { cx: p.x(e[0]), cy: p.y(e[1]), r: 4, class: "multiplier",
-                   "data-modulus": Math.hypot(e[0], e[1]).toFixed(6) }, p.layer);
+    Plot.el("circle", { cx: p.x(e[0]), cy: p.y(e[1]), r: 4, fill: "#c2410c", class: "multiplier",
+                        "data-modulus": Math.hypot(e[0], e[1]).toFixed(6) }, p.layer)
+      .appendChild(Plot.el("title", {})).textContent =
+        "multiplier " + Plot.fmt(e[0]) + (e[1] < 0 ? " - " : " + ") + Plot.fmt(Math.abs(e[1])) +
+        "i, modulus " + Plot.fmt(Math.hypot(e[0], e[1]));
+  Plot.legend(p, [{ label: "multiplier", color: "#c2410c", mark: "dot" },
+                  { label: "|z| = 1", color: "#5b6570", dash: "3 3" }], null, "left");
+  Plot.readout(p);
 }
 
-/* ---- simulating from a clicked state ----------------------------------- */
+/* ---- simulating from a state ------------------------------------------- */
 
-async function simulateFrom(evt, which) {
+/* Three periods of the selected orbit from x in six pieces, each drawn as
+ * it arrives and the next started from its final state. */
+async function simulateFrom(x) {
   const o = state.orbits[state.selected];
   if (!o || !state.frames)
     return;
-  const p = which === 2 ? state.frames.r2 : state.frames.r1;
-  const box = p.svg.getBoundingClientRect();
-  const px = evt.clientX - box.left, py = evt.clientY - box.top;
-  const a = p.xr[0] + (px - PAD.left) / p.pw * (p.xr[1] - p.xr[0]);
-  const b = p.yr[1] - (py - PAD.top) / p.ph * (p.yr[1] - p.yr[0]);
-  /* the clicked pair, the other two from the selected orbit's start */
-  const x = o.x0.slice();
-  if (which === 2) { x[1] = a; x[3] = b; } else { x[0] = a; x[2] = b; }
   const { r1, r2 } = state.frames;
-  clearError();
+  clearError("orbits");
   for (const f of [r1, r2])
     for (const old of f.layer.querySelectorAll(".simulated"))
       old.remove();
-  /* three periods in six pieces, each drawn as it arrives and the next
-   * started from its final state */
   const pieces = 6, span = 3 * o.period / pieces;
+  const style = (m) => ({ dash: DASH[m] || "", width: 1.4 });
   let from = x, points = 0;
   try {
     for (let k = 0; k < pieces; k++) {
@@ -372,28 +605,43 @@ async function simulateFrom(evt, which) {
                    fields: ["x1", "x2", "v1", "v2", "mode"] },
       }));
       const s = ans.samples;
-      drawModes(r2, s.x2, s.v2, s.mode, "#555", "simulated");
-      drawModes(r1, s.x1, s.v1, s.mode, "#555", "simulated");
+      Plot.lines(r2, s.x2, s.v2, s.mode, "#555", { class: "simulated" }, style);
+      Plot.lines(r1, s.x1, s.v1, s.mode, "#555", { class: "simulated" }, style);
       points += s.x1.length;
       from = ans.final.x;
-      status("simulating from (" + x.map((v) => v.toPrecision(4)).join(", ") + "): " +
+      status("orbits", "simulating from (" + x.map((v) => v.toPrecision(4)).join(", ") + "): " +
              points + " points, " + (k + 1) + " of " + pieces + " pieces");
     }
   } catch (e) {
-    showError(e);
+    showError("orbits", e);
   }
 }
 
-/* ---- families and regions ---------------------------------------------- */
-
-async function continueFamily(evt) {
-  evt.preventDefault();
+function clickSimulate(evt, n) {
   const o = state.orbits[state.selected];
+  if (!o || !state.frames)
+    return;
+  const p = n === 2 ? state.frames.r2 : state.frames.r1;
+  if (!p.inside(evt))
+    return;
+  const [a, b] = p.invert(evt);
+  /* the clicked pair, the other two from the selected orbit's start */
+  const x = o.x0.slice();
+  x[n - 1] = a;
+  x[n + 1] = b;
+  simulateFrom(x);
+}
+
+/* ---- families ------------------------------------------------------------ */
+
+async function continueFamily() {
+  const o = state.orbits[state.selected];
+  const f = $("#continue-form");
+  clearError("family");
   if (!o)
-    return showError(new Problem(0, { detail: "find an orbit first" }));
-  const f = evt.target;
-  clearError();
-  status("continuing...");
+    return showError("family", new Problem(0, { detail: "find an orbit first" }));
+  status("family", "continuing...");
+  f.querySelector("button").disabled = true;
   try {
     const ans = await post("/continue", Object.assign({}, state.params, {
       guess: { durations: o.phases.map((q) => q.duration), modes: o.phases.map((q) => q.mode) },
@@ -401,125 +649,344 @@ async function continueFamily(evt) {
       range: [Number(f.from.value), Number(f.to.value)],
     }));
     const pts = ans.branches.flatMap((b) => b.points);
-    const p = frame(document.getElementById("family"), range([pts.map((q) => q.value)]),
-                    range([pts.map((q) => q.period)]), ans.parameter, "period");
+    const rows = [];
+    ans.branches.forEach((b, k) => b.points.forEach((q) => rows.push([k, q.value, q.period, q.stable])));
+    state.figures.family = () => ({ columns: ["branch", ans.parameter, "period", "stable"], rows });
+    const p = Plot.frame($("#family"), {
+      x: Plot.extent([pts.map((q) => q.value)]), y: Plot.extent([pts.map((q) => q.period)]),
+      side: 110, xlabel: label(ans.parameter, "param"), ylabel: label("period", "t"),
+      xname: ans.parameter, yname: "period" });
     ans.branches.forEach((b, k) => {
       for (let i = 1; i < b.points.length; i++) {
         const a = b.points[i - 1], c = b.points[i];
-        el("line", { x1: p.x(a.value), y1: p.y(a.period), x2: p.x(c.value), y2: p.y(c.period),
-                     stroke: COLORS[k % COLORS.length], "stroke-width": 1.8,
-                     "stroke-dasharray": a.stable && c.stable ? "" : "5 4",
-                     class: "branch" }, p.layer);
+        Plot.el("line", { x1: p.x(a.value), y1: p.y(a.period), x2: p.x(c.value), y2: p.y(c.period),
+                          stroke: color(k), "stroke-width": 1.8,
+                          "stroke-dasharray": a.stable && c.stable ? "" : "5 4",
+                          class: "branch" }, p.layer);
       }
       for (const s of b.special) {
-        el("circle", { cx: p.x(s.value), cy: p.y(s.orbit.period), r: 4,
-                       class: "special", "data-type": s.type }, p.layer);
-        el("text", { x: p.x(s.value) + 6, y: p.y(s.orbit.period) - 6, class: "special-label" },
-           p.layer).textContent = s.type.replace("_", " ") + " " + s.value.toPrecision(6);
+        const x = p.x(s.value), right = x > p.pad.left + p.pw * 0.6;
+        Plot.el("circle", { cx: x, cy: p.y(s.orbit.period), r: 4, fill: "#fff", stroke: "#b91c1c",
+                            "stroke-width": 2, class: "special", "data-type": s.type }, p.layer);
+        Plot.el("text", { x: right ? x - 6 : x + 6, y: p.y(s.orbit.period) - 6, fill: "#b91c1c",
+                          "font-size": 11, "text-anchor": right ? "end" : "start",
+                          class: "special-label" }, p.top)
+          .textContent = s.type.replace("_", " ") + " " + s.value.toPrecision(6);
       }
     });
-    status("family: " + pts.length + " points, " +
-           ans.branches.reduce((k, b) => k + b.special.length, 0) +
-           " special points (stable solid, unstable dashed)");
+    Plot.legend(p, [
+      ...ans.branches.map((b, k) => ({ label: "branch " + k, color: color(k) })),
+      { label: "stable", color: "#555" }, { label: "unstable", color: "#555", dash: "5 4" },
+      { label: "special point", color: "#fff", stroke: "#b91c1c", mark: "dot" }]);
+    Plot.readout(p);
+    status("family", "family: " + pts.length + " points, " +
+           ans.branches.reduce((k, b) => k + b.special.length, 0) + " special points");
   } catch (e) {
-    status("");
-    showError(e);
+    status("family", "");
+    showError("family", e);
+  } finally {
+    f.querySelector("button").disabled = false;
   }
 }
 
-async function existenceMap(evt) {
-  evt.preventDefault();
-  const n = Number(evt.target.n.value);
-  const p0 = state.params && state.params.params;
-  if (!p0)
-    return showError(new Problem(0, { detail: "the map takes dimensionless parameters: find orbits with them first" }));
-  clearError();
-  status("mapping...");
+/* ---- long work: maps and basins as jobs --------------------------------- */
+
+/* Runs work(ctl) for a panel whose form has a submit, a cancel button and
+ * a progress bar: the submit disabled while it runs, cancel asks the job
+ * to end, the bar follows the job's status. */
+async function longWork(id, what, work) {
+  const form = $("#" + id + "-form"), go = form.querySelector("button[type=submit]");
+  const cancel = form.querySelector(".cancel"), bar = form.querySelector("progress");
+  const ctl = { cancelled: false };
+  clearError(id);
+  go.disabled = true;
+  cancel.hidden = false;
+  cancel.disabled = false;
+  bar.hidden = false;
+  bar.value = 0;
+  cancel.onclick = () => {
+    ctl.cancelled = true;
+    cancel.disabled = true;
+    status(id, what + ": cancelling...");
+  };
+  ctl.progress = (st) => {
+    bar.value = st.progress;
+    const items = st.items ? ", " + st.items.done + " of " + st.items.total + " done" : "";
+    status(id, what + " job: " + st.status + ", " + st.progress + " %" + items);
+  };
   try {
-    const lines = await post("/map", {
-      params: p0, kind: "all", max_period: 1,
-      axes: [{ parameter: "chi", from: 0.96, to: 0.04, n },
-             { parameter: "ur", from: 1.5 * p0.us, to: 15 * p0.us, n }],
-    }, true);
-    const svg = document.getElementById("map");
+    await work(ctl);
+  } catch (e) {
+    if (e instanceof Cancelled)
+      status(id, what + ": cancelled");
+    else {
+      status(id, "");
+      showError(id, e);
+    }
+  } finally {
+    go.disabled = false;
+    cancel.hidden = true;
+    bar.hidden = true;
+  }
+}
+
+/* The map's categories: a cell's orbits of the asked kind. */
+const MAP_KEY = [
+  { label: "none", color: "#eef0f2" }, { label: "unstable", color: "#f4a259" },
+  { label: "stable", color: "#1f5fa8" }, { label: "two or more", color: "#0b2545" }];
+
+function mapClass(l) {
+  if (!l.orbits.length)
+    return 0;
+  return l.orbits.length > 1 ? 3 : l.orbits[0].stable ? 2 : 1;
+}
+
+async function existenceMap() {
+  const f = $("#map-form");
+  if (!state.params)
+    return showError("map", new Problem(0, { detail: "find orbits first" }));
+  const xp = f.xp.value, yp = f.yp.value;
+  const xn = Number(f.xn.value), yn = Number(f.yn.value);
+  const xr = [Number(f.xfrom.value), Number(f.xto.value)];
+  const yr = [Number(f.yfrom.value), Number(f.yto.value)];
+  const request = Object.assign({}, state.params, {
+    kind: f.kind.value, max_period: Number(f.max_period.value),
+    axes: [{ parameter: xp, from: xr[0], to: xr[1], n: xn },
+           { parameter: yp, from: yr[0], to: yr[1], n: yn }],
+  });
+  await longWork("map", "map", async (ctl) => {
+    status("map", "map: submitted");
+    const text = await job("/map", request, ctl, ctl.progress);
+    const lines = text.split("\n").filter((l) => l.trim()).map((l) => JSON.parse(l));
+    const svg = $("#map");
     /* cells centred on the grid's values */
-    const hx = 13.5 / (2 * (n - 1 || 1)), hy = 0.92 / (2 * (n - 1 || 1));
-    const p = frame(svg, [1.5 - hx, 15 + hx], [0.04 - hy, 0.96 + hy], "ur / us", "chi", true);
-    const cw = p.pw / n, chh = p.ph / n;
-    let with_orbit = 0;
+    const hx = (xr[1] - xr[0]) / (2 * (xn - 1 || 1)), hy = (yr[1] - yr[0]) / (2 * (yn - 1 || 1));
+    const p = Plot.frame(svg, {
+      x: [Math.min(xr[0], xr[1]) - Math.abs(hx), Math.max(xr[0], xr[1]) + Math.abs(hx)],
+      y: [Math.min(yr[0], yr[1]) - Math.abs(hy), Math.max(yr[0], yr[1]) + Math.abs(hy)],
+      exact: true, side: 100, xlabel: label(xp, "param"), ylabel: label(yp, "param"), xname: xp, yname: yp });
+    const cw = p.pw / xn, ch = p.ph / yn;
+    const byCell = new Map();
+    const rows = [];
     for (const l of lines) {
       if (!l.index)
         continue;
-      const stable = l.orbits.some((q) => q.stable);
-      with_orbit += l.orbits.length > 0;
-      el("rect", { x: PAD.left + l.index[1] * cw, y: PAD.top + l.index[0] * chh,
-                   width: cw + 0.5, height: chh + 0.5,
-                   class: l.orbits.length ? (stable ? "cell stable" : "cell unstable") : "cell none" },
-         p.layer);
+      const k = mapClass(l);
+      byCell.set(l.index[0] + "," + l.index[1], l);
+      const x = p.x(l.at[xp]) - cw / 2, y = p.y(l.at[yp]) - ch / 2;
+      const r = Plot.el("rect", { x: x.toFixed(2), y: y.toFixed(2), width: (cw + 0.4).toFixed(2),
+                                  height: (ch + 0.4).toFixed(2), fill: MAP_KEY[k].color,
+                                  class: "cell " + ["none", "unstable", "stable", "several"][k],
+                                  "data-i": l.index[0], "data-j": l.index[1] }, p.layer);
+      const orbits = l.orbits.map((q) => q.kind + " T=" + Plot.fmt(q.period) +
+                                   (q.stable ? " stable" : " unstable"));
+      Plot.el("title", {}, r).textContent = xp + " = " + Plot.fmt(l.at[xp]) + ", " + yp + " = " +
+        Plot.fmt(l.at[yp]) + ": " + (orbits.join("; ") || "no orbit");
+      rows.push([l.at[xp], l.at[yp], l.orbits.length, l.orbits.filter((q) => q.stable).length,
+                 l.orbits.map((q) => q.kind + ":" + q.period).join(" ")]);
     }
+    state.figures.map = () => ({ columns: [xp, yp, "orbits", "stable", "kind:period"], rows });
+    state.mapLines = lines;
+    /* the current parameter point */
+    const cur = paramValues();
+    if (cur && cur[xp] !== undefined && cur[yp] !== undefined) {
+      Plot.el("circle", { cx: p.x(cur[xp]), cy: p.y(cur[yp]), r: 6, fill: "none", stroke: "#b91c1c",
+                          "stroke-width": 2.5, class: "current" }, p.top);
+    }
+    Plot.legend(p, [...MAP_KEY.map((e) => ({ label: e.label, color: e.color, mark: "box" })),
+                    { label: "current point", color: "#fff", stroke: "#b91c1c", mark: "dot" }]);
+    Plot.readout(p, (x, y) => {
+      const i = Math.round((x - xr[0]) / ((xr[1] - xr[0]) / (xn - 1 || 1)));
+      const j = Math.round((y - yr[0]) / ((yr[1] - yr[0]) / (yn - 1 || 1)));
+      const l = byCell.get(i + "," + j);
+      return l ? (l.orbits.length ? l.orbits.map((q) => q.kind + " T=" + Plot.fmt(q.period))
+                  .join(", ") : "no orbit") : "";
+    });
     const done = lines[lines.length - 1];
-    status("map: " + with_orbit + " of " + n * n + " cells with a period-1 orbit (dark: a stable one), " +
+    status("map", "map: " + done.with_orbits + " of " + done.cells + " cells with orbits (kind " +
+           f.kind.value + ", period at most " + f.max_period.value + "), " +
            done.seconds.toFixed(2) + " s");
-  } catch (e) {
-    status("");
-    showError(e);
-  }
+  });
 }
 
-async function basins(evt) {
-  evt.preventDefault();
-  const n = Number(evt.target.n.value);
+/* A map cell clicked: its parameters in the form, and its orbits found. */
+function mapCell(evt) {
+  const r = evt.target.closest("rect.cell");
+  if (!r || !state.mapLines)
+    return;
+  const l = state.mapLines.find((q) => q.index && q.index[0] === Number(r.dataset.i) &&
+                                q.index[1] === Number(r.dataset.j));
+  for (const k in l.at) {
+    const input = $("#" + units() + " input[name=" + k + "]");
+    if (input)
+      input.value = +l.at[k].toPrecision(8);
+  }
+  markStale();
+  remember();
+  findOrbits();
+}
+
+async function basins() {
+  const f = $("#basins-form");
   if (!state.params)
-    return showError(new Problem(0, { detail: "find orbits first" }));
-  clearError();
-  status("computing basins...");
-  try {
-    const ans = await post("/basins", Object.assign({}, state.params, {
-      axes: [{ variable: "x1", from: -2, to: 4, n }, { variable: "x2", from: 0, to: 8, n }],
-      state: { v1: 0, v2: state.params.params ? state.params.params.V : state.params.physical.v0 },
-    }));
+    return showError("basins", new Problem(0, { detail: "find orbits first" }));
+  const n = Number(f.n.value);
+  const xr = [Number(f.x1from.value), Number(f.x1to.value)];
+  const yr = [Number(f.x2from.value), Number(f.x2to.value)];
+  const v = paramValues();
+  const v2 = f.v2.value.trim() === "" ? (state.params.params ? v.V : v.v0) : Number(f.v2.value);
+  const request = Object.assign({}, state.params, {
+    axes: [{ variable: "x1", from: xr[0], to: xr[1], n }, { variable: "x2", from: yr[0], to: yr[1], n }],
+    state: { v1: Number(f.v1.value), v2 },
+  });
+  await longWork("basins", "basins", async (ctl) => {
+    status("basins", "basins: submitted");
+    const ans = JSON.parse(await job("/basins", request, ctl, ctl.progress));
     const L = ans.labels, bytes = atob(L.data);
-    const hx = 6 / (2 * (L.rows - 1 || 1)), hy = 8 / (2 * (L.cols - 1 || 1));
-    const p = frame(document.getElementById("basins"), [-2 - hx, 4 + hx], [-hy, 8 + hy],
-                    "x1", "x2", true);
-    const cw = p.pw / L.rows, chh = p.ph / L.cols;
+    const hx = (xr[1] - xr[0]) / (2 * (L.rows - 1 || 1)), hy = (yr[1] - yr[0]) / (2 * (L.cols - 1 || 1));
+    const p = Plot.frame($("#basins"), { x: [xr[0] - hx, xr[1] + hx], y: [yr[0] - hy, yr[1] + hy],
+                                         exact: true, side: 150, xlabel: label("x1", "x"),
+                                         ylabel: label("x2", "x"), xname: "x1", yname: "x2" });
+    const fill = (b) => (b === L.unresolved ? "#dddddd" : b === L.perpetual_slip ? "#999999"
+                         : color(b));
+    /* one pixel a cell, drawn as an image: row i runs along x1, column j
+     * along x2 (up) */
+    const c = document.createElement("canvas");
+    c.width = L.rows;
+    c.height = L.cols;
+    const g = c.getContext("2d"), img = g.createImageData(L.rows, L.cols);
+    const counts = new Map();
     for (let i = 0; i < L.rows; i++)
       for (let j = 0; j < L.cols; j++) {
-        const b = bytes.charCodeAt(i * L.cols + j);
-        const fill = b === L.unresolved ? "#ddd" : b === L.perpetual_slip ? "#999" : COLORS[b % COLORS.length];
-        /* row i runs along x1, column j along x2 */
-        el("rect", { x: PAD.left + i * cw, y: PAD.top + (L.cols - 1 - j) * chh,
-                     width: cw + 0.5, height: chh + 0.5, fill, class: "basin" }, p.layer);
+        const b = bytes.charCodeAt(i * L.cols + j), hex = fill(b);
+        counts.set(b, (counts.get(b) || 0) + 1);
+        const o = 4 * ((L.cols - 1 - j) * L.rows + i);
+        img.data[o] = parseInt(hex.slice(1, 3), 16);
+        img.data[o + 1] = parseInt(hex.slice(3, 5), 16);
+        img.data[o + 2] = parseInt(hex.slice(5, 7), 16);
+        img.data[o + 3] = 255;
       }
-    const legend = document.getElementById("basins-legend");
-    legend.textContent = "";
-    for (const a of ans.attractors) {
-      const li = document.createElement("li");
-      li.style.setProperty("--swatch", COLORS[a.label % COLORS.length]);
-      li.textContent = a.kind + ", period " + a.period.toFixed(4) + ", " +
-        (100 * a.fraction).toFixed(1) + " % of the slice";
-      legend.appendChild(li);
-    }
-    status("basins: " + ans.attractors.length + " attractor(s)");
-  } catch (e) {
-    status("");
-    showError(e);
+    g.putImageData(img, 0, 0);
+    Plot.el("image", { x: p.pad.left, y: p.pad.top, width: p.pw, height: p.ph, href: c.toDataURL(),
+                       preserveAspectRatio: "none", "image-rendering": "pixelated",
+                       class: "basin" }, p.layer);
+    const name = (b) => {
+      const a = ans.attractors.find((q) => q.label === b);
+      return a ? a.kind + " T=" + Plot.fmt(a.period) : b === L.unresolved ? "unresolved"
+        : b === L.perpetual_slip ? "perpetual slip" : "label " + b;
+    };
+    const entries = ans.attractors.map((a) => ({
+      label: a.kind + " " + (100 * a.fraction).toFixed(1) + " %",
+      color: color(a.label), mark: "box" }));
+    if (counts.has(L.unresolved))
+      entries.push({ label: "unresolved", color: "#dddddd", mark: "box" });
+    if (counts.has(L.perpetual_slip))
+      entries.push({ label: "perpetual slip", color: "#999999", mark: "box" });
+    Plot.legend(p, entries);
+    Plot.readout(p, (x, y) => {
+      const i = Math.round((x - xr[0]) / ((xr[1] - xr[0]) / (L.rows - 1 || 1)));
+      const j = Math.round((y - yr[0]) / ((yr[1] - yr[0]) / (L.cols - 1 || 1)));
+      return i >= 0 && j >= 0 && i < L.rows && j < L.cols ? name(bytes.charCodeAt(i * L.cols + j)) : "";
+    });
+    state.figures.basins = () => {
+      const rows = [];
+      for (let i = 0; i < L.rows; i++)
+        for (let j = 0; j < L.cols; j++)
+          rows.push([xr[0] + i * 2 * hx, yr[0] + j * 2 * hy, name(bytes.charCodeAt(i * L.cols + j))]);
+      return { columns: ["x1", "x2", "attractor"], rows };
+    };
+    state.basinsAnswer = ans;
+    const legend = ans.attractors.map((a) => a.kind + " " + (100 * a.fraction).toFixed(1) + " %");
+    status("basins", "basins: " + ans.attractors.length + " attractor(s): " + legend.join(", "));
+  });
+}
+
+/* ---- export ---------------------------------------------------------------- */
+
+/* Each figure's buttons: SVG and PNG of the figure, CSV and JSON of its data. */
+function exportButtons() {
+  for (const fig of document.querySelectorAll("figure[data-name]")) {
+    const svg = fig.querySelector("svg"), name = "stickslip-" + fig.dataset.name;
+    /* the figure's place kept while it is empty */
+    svg.setAttribute("viewBox", "0 0 " + svg.dataset.width + " " + svg.dataset.height);
+    svg.style.width = svg.dataset.width + "px";
+    const bar = document.createElement("div");
+    bar.className = "export";
+    const add = (fmt, make) => {
+      const b = document.createElement("button");
+      b.type = "button";
+      b.textContent = fmt;
+      b.className = "export-" + fmt.toLowerCase();
+      b.setAttribute("aria-label", fmt + " of " + svg.getAttribute("aria-label"));
+      b.addEventListener("click", async () => {
+        if (!svg.childNodes.length)
+          return;
+        Plot.download(name + "." + fmt.toLowerCase(), await make());
+      });
+      bar.appendChild(b);
+    };
+    add("SVG", () => new Blob([Plot.svgText(svg)], { type: "image/svg+xml" }));
+    add("PNG", () => Plot.pngBlob(svg));
+    add("CSV", () => new Blob([Plot.csv(state.figures[svg.id]())], { type: "text/csv" }));
+    add("JSON", () => {
+      const t = state.figures[svg.id]();
+      const doc = { figure: fig.dataset.name, units: state.units, input: state.params,
+                    columns: t.columns, rows: t.rows };
+      return new Blob([JSON.stringify(doc, null, 1)], { type: "application/json" });
+    });
+    fig.appendChild(bar);
   }
 }
 
 /* ---- wiring ------------------------------------------------------------- */
 
-document.getElementById("units").addEventListener("change", (e) => {
-  document.getElementById("dimensionless").hidden = e.target.value !== "dimensionless";
-  document.getElementById("physical").hidden = e.target.value !== "physical";
+/* The view of the URL: the forms set, the orbits found, and the panels it
+ * names run again. */
+async function showURL() {
+  const view = readURL();
+  state.open = new Set(view.open);
+  for (const id of ["family", "map", "basins"]) {
+    $("#" + id).textContent = "";
+    status(id, "");
+    clearError(id);
+  }
+  await findOrbits(view);
+  const runs = { family: continueFamily, map: existenceMap, basins };
+  for (const id of view.open)
+    await runs[id]();
+}
+
+$("#units").addEventListener("change", (e) => {
+  setUnits(e.target.value, true);
+  markStale();
 });
-document.getElementById("params").addEventListener("submit", (e) => {
+$("#params").addEventListener("input", (e) => {
+  if (e.target.id !== "units")
+    markStale();
+});
+$("#params").addEventListener("submit", (e) => {
   e.preventDefault();
+  state.open.clear();
+  remember();
   findOrbits();
 });
-document.getElementById("portrait2").addEventListener("click", (e) => simulateFrom(e, 2));
-document.getElementById("portrait1").addEventListener("click", (e) => simulateFrom(e, 1));
-document.getElementById("continue-form").addEventListener("submit", continueFamily);
-document.getElementById("map-form").addEventListener("submit", existenceMap);
-document.getElementById("basins-form").addEventListener("submit", basins);
-findOrbits();
+$("#continue-form").parameter.addEventListener("change", familyRange);
+$("#simulate-form").addEventListener("submit", (e) => {
+  e.preventDefault();
+  const f = e.target;
+  simulateFrom(["x1", "x2", "v1", "v2"].map((k) => Number(f[k].value)));
+});
+$("#portrait2").addEventListener("click", (e) => clickSimulate(e, 2));
+$("#portrait1").addEventListener("click", (e) => clickSimulate(e, 1));
+$("#map").addEventListener("click", mapCell);
+for (const [id, run] of [["continue-form", continueFamily], ["map-form", existenceMap],
+                         ["basins-form", basins]])
+  $("#" + id).addEventListener("submit", (e) => {
+    e.preventDefault();
+    state.open.add(id === "continue-form" ? "family" : id.replace("-form", ""));
+    remember();
+    run();
+  });
+window.addEventListener("popstate", showURL);
+exportButtons();
+showURL().then(() => remember(true));

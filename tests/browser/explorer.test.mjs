@@ -1,28 +1,39 @@
 // The explorer in a real browser (Debian's chromium, headless, driven by
 // puppeteer-core) against a live stickslipd:
 //   node explorer.test.mjs BASE_URL OUT_DIR
-// It checks that the page loads with no console error and no failed
-// request, finds the paper's orbit (period 10.2714...), draws both phase
-// portraits with its three phases (slip dotted, overshoot solid, stick
-// dashed) from samples placed to half a pixel, draws the stick constraints
-// and the multipliers inside the unit circle, simulates from a clicked
-// state, continues the family (with its grazing point), and shows the
-// daemon's own words for a bad parameter; a screenshot of the page on the
-// paper's orbit goes to OUT_DIR/explorer.png.
+// It loads a URL holding a view and finds the orbits /orbit gives for it;
+// checks the portraits (the paper's orbit in its three phases, sampled to
+// half a pixel), the legend tying each curve to its row, hiding a row's
+// curves, keyboard selection and a simulation from a typed state, axis
+// labels with units, the back button, panels marked stale when the
+// parameters change; draws the overshoot map with its colour key and the
+// current point, loads a cell's orbits by a click; exports every figure
+// (the SVG parses, the PNG is one, the CSV and JSON hold the answer's
+// numbers); runs 100x100 maps as jobs (progress, one cancelled, one
+// finished); continues the family in Fr in physical units; shows errors
+// next to their panel and explains a CORS failure; runs axe-core (no
+// serious or critical violation) and checks that nothing overflows at
+// 420 px.  Screenshots go to OUT_DIR.
+import fs from "node:fs";
+import path from "node:path";
+import { createRequire } from "node:module";
 import puppeteer from "puppeteer-core";
 
 const [base, out] = process.argv.slice(2);
-const document_has = (texts, word) => texts.some((s) => s.includes(word));
+const require = createRequire(import.meta.url);
 const failures = [];
 let checks = 0;
 function check(ok, what) {
   checks++;
-  if (!ok) {
+  if (!ok)
     failures.push(what);
-    console.log("FAIL: " + what);
-  } else {
-    console.log("ok: " + what);
-  }
+  console.log((ok ? "ok: " : "FAIL: ") + what);
+}
+const PAPER = { chi: 0.2, eta: 4, us: 0.0724, ur: 0.6178, V: 1 };
+async function api(p, body) {
+  const r = await fetch(base + p, { method: "POST", headers: { "Content-Type": "application/json" },
+                                    body: JSON.stringify(body) });
+  return r.text();
 }
 
 const browser = await puppeteer.launch({
@@ -30,134 +41,349 @@ const browser = await puppeteer.launch({
   headless: true,
   args: ["--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage"],
 });
+const t00 = Date.now();
+let downloads = null;
 try {
   const page = await browser.newPage();
   await page.setViewport({ width: 1400, height: 1300 });
   const consoleErrors = [], failed = [], problems = [];
-  page.on("console", (m) => {
-    if (m.type() === "error")
-      consoleErrors.push(m.text());
-  });
+  page.on("console", (m) => m.type() === "error" && consoleErrors.push(m.text()));
   page.on("pageerror", (e) => consoleErrors.push(e.message));
   page.on("requestfailed", (r) => failed.push(r.url()));
-  page.on("response", (r) => {
-    if (r.status() >= 400)
-      problems.push(r.status() + " " + r.url());
-  });
+  page.on("response", (r) => r.status() >= 400 && problems.push(r.status() + " " + r.url()));
+  downloads = fs.mkdtempSync(path.join(out, "downloads-"));
+  const cdp = await browser.target().createCDPSession();
+  await cdp.send("Browser.setDownloadBehavior", { behavior: "allow", downloadPath: downloads,
+                                                  eventsEnabled: true });
+  const ended = [];
+  cdp.on("Browser.downloadProgress", (e) => e.state !== "inProgress" && ended.push(e.state));
+  const text = (sel) => page.$eval(sel, (e) => e.textContent);
+  const shown = (sel) => page.$eval(sel, (e) => (e.hidden ? "" : e.textContent));
+  const rowsOf = () => page.$$eval("#orbits tbody tr", (trs) =>
+    trs.map((tr) => [...tr.cells].map((c) => c.textContent)));
 
+  // 1. a view in the URL: the orbits /orbit gives for it
   const t0 = Date.now();
-  await page.goto(base + "/", { waitUntil: "networkidle0" });
-  await page.waitForFunction(
-    () => document.querySelectorAll("#orbits tbody tr").length > 0,
-    { timeout: 30000 });
+  const q = new URLSearchParams(Object.assign({ units: "dimensionless", kind: "all", max_period: 4,
+                                                selected: 0 }, PAPER));
+  await page.goto(base + "/?" + q, { waitUntil: "networkidle0" });
+  await page.waitForFunction(() => document.querySelectorAll("#orbits tbody tr").length > 0,
+                             { timeout: 30000 });
   const loadMs = Date.now() - t0;
-
-  // the paper's orbit, found with no guess
-  const rows = await page.$$eval("#orbits tbody tr", (trs) =>
-    trs.map((tr) => tr.textContent));
-  check(rows.some((r) => r.includes("overshoot") && r.includes("10.2714")),
-        "the paper's overshoot orbit (period 10.2714) is listed: " + rows.length + " orbit(s)");
-
-  check(await page.$eval("#error", (e) => e.hidden && getComputedStyle(e).display === "none"),
-        "no error shown after a successful search");
+  const direct = JSON.parse(await api("/orbit", { params: PAPER, kind: "all", max_period: 4 }));
+  let rows = await rowsOf();
+  check(rows.length === direct.orbits.length &&
+        direct.orbits.every((o, i) => rows[i][4] === o.period.toFixed(6)),
+        "the URL's view lists the orbits of /orbit: " + rows.map((r) => r[4]).join(", "));
+  check(rows.some((r) => r[2] === "overshoot" && r[4].startsWith("10.2714")),
+        "the paper's overshoot orbit (period 10.2714) is listed");
+  check(await page.$eval("#error", (e) => e.hidden), "no error shown after a successful search");
 
   // the portraits: the selected orbit drawn in its three phases, styled
   const seg = await page.evaluate(() => {
-    const out = {};
+    const o = {};
     for (const id of ["portrait2", "portrait1"]) {
-      const lines = [...document.querySelectorAll("#" + id + " polyline.curve.selected")];
-      out[id] = {
-        modes: lines.map((l) => l.dataset.mode),
-        dash: lines.map((l) => l.getAttribute("stroke-dasharray")),
-        points: lines.map((l) => l.getAttribute("points").trim().split(/\s+/).length),
-      };
+      const ls = [...document.querySelectorAll("#" + id + " polyline.curve.selected")];
+      o[id] = { modes: ls.map((l) => l.dataset.mode), dash: ls.map((l) => l.getAttribute("stroke-dasharray")),
+                points: ls.map((l) => l.getAttribute("points").trim().split(/\s+/).length) };
     }
-    return out;
+    return o;
   });
-  const out_points = {};
   for (const id of ["portrait2", "portrait1"]) {
     const s = seg[id];
-    check(s.modes.join(",") === "slip,overshoot,stick",
-          id + ": three segments in the orbit's order, got " + s.modes.join(","));
-    out_points[id] = s.points;
+    check(s.modes.join(",") === "slip,overshoot,stick", id + ": slip, overshoot, stick: " + s.modes);
     check(s.dash[0] !== "" && s.dash[1] === "" && s.dash[2] !== "" && s.dash[0] !== s.dash[2],
           id + ": slip dotted, overshoot solid, stick dashed (" + JSON.stringify(s.dash) + ")");
-    check(s.points.every((n) => n >= 2), id + ": each segment has points: " + s.points);
   }
-  // the stick is the straight x2' = V in (x2, x2')
   const stickY = await page.$eval("#portrait2 polyline.curve.selected[data-mode=stick]",
     (l) => [...new Set(l.getAttribute("points").trim().split(/\s+/).map((p) => p.split(",")[1]))]);
   check(stickY.length === 1, "portrait2: the stick is a horizontal line: " + stickY);
-
-  // the constraints of Fig. 4 and the multipliers
   const fig4 = await page.$$eval("#constraints polyline.constraint", (ls) => ls.map((l) => l.dataset.name));
   check(fig4.join(",") === "F1,F2", "the stick constraints F1 and F2 are drawn");
   const mods = await page.$$eval("#multipliers circle.multiplier", (cs) => cs.map((c) => Number(c.dataset.modulus)));
   check(mods.length === 2 && mods.every((m) => Math.abs(m - 0.195452) < 1e-4),
         "two multipliers of modulus 0.19545 inside the unit circle: " + mods);
 
-  // the samples asked for are placed to the plots' pixels
-  const status = await page.$eval("#status", (e) => e.textContent);
-  check(/points drawn/.test(status), "status: " + status);
+  // axis labels with units; a legend whose colours are the rows' swatches
+  const labels = await page.$$eval("svg.plot .xlabel, svg.plot .ylabel", (ts) => ts.map((t) => t.textContent));
+  check(labels.length >= 8 && labels.every((l) => /\(.+\)/.test(l)),
+        "every axis says its unit: " + labels.join("; "));
+  const tie = await page.evaluate(() => {
+    const sw = [...document.querySelectorAll("#orbits .swatch")].map((s) => s.style.getPropertyValue("--swatch"));
+    const leg = [...document.querySelectorAll("#portrait2 .legend .entry line")].map((l) => l.getAttribute("stroke"));
+    const curves = sw.map((_, i) => {
+      const l = document.querySelector("#portrait2 polyline[data-orbit='" + i + "']");
+      return l && l.getAttribute("stroke");
+    });
+    return { sw, leg, curves };
+  });
+  check(tie.sw.length === rows.length && tie.sw.every((c, i) => c === tie.leg[i] && c === tie.curves[i]),
+        "each row's swatch is its legend entry's and its curve's colour: " + tie.sw.join(" "));
 
-  await page.screenshot({ path: out + "/explorer.png", fullPage: false });
+  // hide a row's curves, then the back button shows them again
+  await page.click("#orbits tbody tr[data-index='1'] input[type=checkbox]");
+  const hiddenNow = await page.$$eval("#portrait2 polyline[data-orbit='1']", (l) => l.length);
+  check(hiddenNow === 0 && (await page.evaluate(() => location.search)).includes("hidden=1"),
+        "a row's box hides its curves, and the URL says so");
+  await page.goBack();
+  await page.waitForFunction(() => document.querySelectorAll("#portrait2 polyline[data-orbit='1']").length > 0,
+                             { timeout: 20000 }).catch(() => {});
+  check(!(await page.evaluate(() => location.search)).includes("hidden") &&
+        (await page.$$eval("#portrait2 polyline[data-orbit='1']", (l) => l.length)) > 0,
+        "the back button returns to the view with every curve shown");
 
-  // a click in the (x2, x2') portrait simulates from there
-  const box = await (await page.$("#portrait2")).boundingBox();
-  await page.mouse.click(box.x + box.width * 0.6, box.y + box.height * 0.5);
-  await page.waitForFunction(
-    () => /6 of 6 pieces/.test(document.getElementById("status").textContent) ||
-          !document.getElementById("error").hidden, { timeout: 60000 });
+  // keyboard: a focused row selected with Enter, a simulation from a typed state
+  await page.focus("#orbits tbody tr[data-index='0']");
+  await page.keyboard.press("ArrowDown");
+  await page.keyboard.press("ArrowDown");
+  await page.keyboard.press("Enter");
+  const sel = await page.$eval("#orbits tbody tr.selected", (tr) => tr.dataset.index);
+  check(sel === "2" && (await page.evaluate(() => location.search)).includes("selected=2"),
+        "rows focusable: two ArrowDown and Enter select orbit 2 (URL selected=" + sel + ")");
+  await page.focus("#orbits tbody tr[data-index='0']");
+  await page.keyboard.press("Enter");
+  await page.focus("#simulate-form input[name=x1]");
+  await page.keyboard.press("Enter");
+  await page.waitForFunction(() => /6 of 6 pieces/.test(document.getElementById("status").textContent) ||
+                                   !document.getElementById("error").hidden, { timeout: 60000 });
   const sims = await page.$$eval("#portrait2 polyline.simulated", (ls) => ls.length);
-  check(sims >= 6, "a click simulates three periods from the clicked state, drawn piece by " +
-        "piece: " + sims + " segments");
+  check(sims >= 6, "Enter in the typed state simulates three periods, piece by piece: " + sims);
+  const box = await (await page.$("#portrait2")).boundingBox();
+  await page.mouse.click(box.x + box.width * 0.4, box.y + box.height * 0.5);
+  await page.waitForFunction(() => /6 of 6 pieces/.test(document.getElementById("status").textContent) ||
+                                   !document.getElementById("error").hidden, { timeout: 60000 });
+  check(/simulating from/.test(await text("#status")), "a click in a portrait simulates from there");
+  // the wheel zooms a portrait about the pointer, a double click returns
+  const ticks = () => page.$$eval("#portrait2 .axes text", (ts) => ts.map((t) => t.textContent).join(" "));
+  const whole = await ticks();
+  await page.mouse.move(box.x + box.width * 0.4, box.y + box.height * 0.5);
+  await page.mouse.wheel({ deltaY: -300 });
+  await page.waitForFunction((w) => [...document.querySelectorAll("#portrait2 .axes text")]
+    .map((t) => t.textContent).join(" ") !== w, { timeout: 5000 }, whole).catch(() => {});
+  const zoomed = await ticks();
+  await page.mouse.click(box.x + box.width * 0.4, box.y + box.height * 0.5, { clickCount: 2 });
+  await page.waitForFunction(() => /6 of 6 pieces/.test(document.getElementById("status").textContent),
+                             { timeout: 60000 });
+  check(zoomed !== whole && (await ticks()) === whole,
+        "the wheel zooms the portrait (ticks " + zoomed.slice(0, 30) + "), a double click returns");
+  await page.screenshot({ path: out + "/explorer.png" });
 
-  // the family of the selected orbit, down in ur to its grazing
+  // the family, its grazing labelled inside the figure
   await page.click("#continue-form button");
-  await page.waitForFunction(
-    () => document.querySelectorAll("#family line.branch").length > 0 ||
-          !document.getElementById("error").hidden, { timeout: 120000 });
-  const specials = await page.$$eval("#family circle.special", (cs) => cs.map((c) => c.dataset.type));
-  check(specials.includes("grazing"), "the continuation diagram shows its grazing: " + specials);
+  await page.waitForFunction(() => document.querySelectorAll("#family line.branch").length > 0 ||
+                                   !document.querySelector("#family-panel .error").hidden, { timeout: 60000 });
+  const graz = await page.evaluate(() => {
+    const t = [...document.querySelectorAll("#family .special-label")].find((e) => /grazing/.test(e.textContent));
+    if (!t)
+      return null;
+    const b = t.getBBox(), w = Number(document.getElementById("family").dataset.width);
+    return { text: t.textContent, inside: b.x >= 0 && b.x + b.width <= w };
+  });
+  check(graz && graz.inside, "the family's grazing is labelled within the figure: " + JSON.stringify(graz));
 
-  // the existence map and the basins of the paper's set (small enough for
-  // a daemon built with the sanitizers); a problem instead is reported
-  const drawnOrError = (sel) => page.waitForFunction(
-    (s) => document.querySelectorAll(s).length > 0 || !document.getElementById("error").hidden,
-    { timeout: 120000 }, sel);
-  await page.$eval("#map-form input[name=n]", (e) => { e.value = "12"; });
-  await page.click("#map-form button");
-  await drawnOrError("#map rect.cell");
-  const shown = async () => page.$eval("#error", (e) => (e.hidden ? "" : e.textContent));
-  const cells = await page.$$eval("#map rect.cell", (rs) => ({
-    all: rs.length, stable: rs.filter((r) => r.classList.contains("stable")).length }));
-  check(cells.all === 144 && cells.stable > 0,
-        "the existence map: " + cells.all + " of 144 cells, " + cells.stable +
-        " with a stable orbit " + (await shown()));
-  await page.$eval("#basins-form input[name=n]", (e) => { e.value = "32"; });
-  await page.click("#basins-form button");
-  await drawnOrError("#basins rect.basin");
-  const legend = await page.$$eval("#basins-legend li", (ls) => ls.map((l) => l.textContent));
-  check(document_has(legend, "overshoot"),
-        "the basins name the overshoot orbit: " + legend.join("; ") + " " + (await shown()));
+  // 2. the overshoot map, its key and the current point; a cell loads its orbits
+  await page.evaluate(() => {
+    const f = document.getElementById("map-form");
+    f.kind.value = "overshoot";
+    f.xn.value = "12";
+    f.yn.value = "12";
+  });
+  await page.click("#map-form button[type=submit]");
+  await page.waitForFunction(() => document.querySelectorAll("#map rect.cell").length > 0 ||
+                                   !document.querySelector("#map-panel .error").hidden, { timeout: 60000 });
+  const map = await page.evaluate(() => ({
+    cells: document.querySelectorAll("#map rect.cell").length,
+    stable: document.querySelectorAll("#map rect.cell.stable").length,
+    key: [...document.querySelectorAll("#map .legend text")].map((t) => t.textContent),
+    current: document.querySelectorAll("#map circle.current").length,
+    title: document.querySelector("#map rect.cell.stable title")?.textContent || "",
+  }));
+  check(map.cells === 144 && map.stable > 0, "the overshoot map: 144 cells, " + map.stable + " stable " +
+        (await shown("#map-panel .error")));
+  check(["none", "unstable", "stable"].every((k) => map.key.includes(k)) && map.current === 1,
+        "the map has its colour key and marks the current point: " + map.key.join(", "));
+  check(/overshoot T=/.test(map.title), "a cell's title names its orbits: " + map.title);
+  const directMap = (await api("/map", {
+    params: PAPER, kind: "overshoot", max_period: 1,
+    axes: [{ parameter: "ur", from: 0.109, to: 1.09, n: 12 }, { parameter: "chi", from: 0.04, to: 0.96, n: 12 }],
+  })).trim().split("\n").map((l) => JSON.parse(l));
 
-  await page.screenshot({ path: out + "/explorer-families.png", fullPage: true });
+  // 3. every figure's exports
+  const files = async (n) => {
+    for (let k = 0; k < 100 && ended.length < n; k++)
+      await new Promise((r) => setTimeout(r, 50));
+    return fs.readdirSync(downloads);
+  };
+  const figures = await page.$$eval("figure[data-name]", (fs) => fs.map((f) => f.dataset.name).filter((n) => n !== "basins"));
+  let count = 0, got = [];
+  for (const name of figures)
+    for (const fmt of ["svg", "png", "csv", "json"]) {
+      await page.click("figure[data-name='" + name + "'] .export-" + fmt);
+      got = await files(++count);
+      // Chrome drops, at times, a download started right after another
+      await new Promise((r) => setTimeout(r, 250));
+    }
+  check(got.length === count && ended.every((e) => e === "completed"),
+        "each figure exports SVG, PNG, CSV and JSON: " + got.length + " of " + count + " (" + ended + ")");
+  const read = (n) => (fs.existsSync(path.join(downloads, n)) ? fs.readFileSync(path.join(downloads, n)) : Buffer.from(""));
+  const parses = await page.evaluate((texts) => texts.map((t) => {
+    const d = new DOMParser().parseFromString(t, "image/svg+xml");
+    return !d.querySelector("parsererror") && d.documentElement.nodeName === "svg" &&
+      d.querySelectorAll(".legend").length > 0;
+  }), figures.map((n) => read("stickslip-" + n + ".svg").toString()));
+  check(parses.every(Boolean), "each SVG parses and carries its legend: " + parses);
+  check(figures.every((n) => read("stickslip-" + n + ".png").subarray(1, 4).toString() === "PNG"),
+        "each PNG is a PNG");
+  const mapCsv = read("stickslip-map.csv").toString().trim().split("\n").slice(1).map((l) => l.split(","));
+  const mapLines = directMap.filter((l) => l.index);
+  check(mapCsv.length === 144 && mapLines.every((l, i) => Number(mapCsv[i][0]) === l.at.ur &&
+          Number(mapCsv[i][1]) === l.at.chi && Number(mapCsv[i][2]) === l.orbits.length),
+        "the map's CSV holds /map's cells and orbit counts");
+  const p2 = JSON.parse(read("stickslip-portrait-x2.json").toString());
+  const o0 = direct.orbits[0];
+  check(p2.columns.join() === "orbit,t,x2,v2,mode" && p2.rows.some((r) => r[0] === 0 && r[1] === 0 &&
+          Math.abs(r[2] - o0.x0[1]) < 1e-12 && Math.abs(r[3] - o0.x0[3]) < 1e-12),
+        "the portrait's JSON holds the orbit's samples from its start x0");
+  const famCsv = read("stickslip-family.csv").toString();
+  check(/^branch,ur,period,stable\n0,/.test(famCsv), "the family's CSV: " + famCsv.slice(0, 40));
+
+  // a map cell loads that point's orbits
+  const before = await page.$eval("input[name=ur]", (e) => e.value);
+  await page.$eval("#map rect.cell.stable", (r) => r.dispatchEvent(new MouseEvent("click", { bubbles: true })));
+  await page.waitForFunction((b) => document.querySelector("input[name=ur]").value !== b &&
+                             /orbit\(s\)/.test(document.getElementById("status").textContent), { timeout: 30000 }, before).catch(() => {});
+  rows = await rowsOf();
+  check(rows.some((r) => r[2] === "overshoot"), "a stable cell's click loads its overshoot orbit: ur = " +
+        (await page.$eval("input[name=ur]", (e) => e.value)));
+  check(await page.$eval("#map", (s) => s.classList.contains("stale")), "the map is marked stale after it");
 
   check(consoleErrors.length === 0, "no console error: " + consoleErrors.join("; "));
   check(failed.length === 0, "no failed request: " + failed.join("; "));
-  check(problems.length === 0, "no 4xx/5xx answer before the bad input: " + problems.join("; "));
+  check(problems.length === 0, "no 4xx/5xx answer before the bad inputs: " + problems.join("; "));
 
-  // a bad parameter: the daemon's words, in an alert
-  await page.$eval("input[name=chi]", (e) => { e.value = "2"; });
+  // errors next to their panel
+  await page.goto(base + "/?" + q, { waitUntil: "networkidle0" });
+  await page.waitForFunction(() => document.querySelectorAll("#orbits tbody tr").length > 0, { timeout: 30000 });
+  await page.$eval("#map-form input[name=xn]", (e) => { e.value = "0"; });
+  await page.click("#map-form button[type=submit]");
+  await page.waitForSelector("#map-panel .error:not([hidden])", { timeout: 10000 }).catch(() => {});
+  check(/n/.test(await text("#map-panel .error")) && (await page.$eval("#error", (e) => e.hidden)),
+        "a bad map shows its problem in the map's panel: " + (await text("#map-panel .error")));
+  await page.$eval("input[name=chi]", (e) => { e.value = "2"; e.dispatchEvent(new Event("input", { bubbles: true })); });
+  check(await page.$eval("#portrait2", (s) => s.classList.contains("stale")), "a changed parameter marks the portraits stale");
   await page.click("#find");
-  await page.waitForSelector("#error:not([hidden])", { timeout: 10000 });
-  const alert = await page.$eval("[role=alert]", (e) => e.textContent);
-  check(/chi/.test(alert) && alert.length > 20, "a bad chi shows the daemon's problem: " + alert);
+  await page.waitForSelector("#error:not([hidden])", { timeout: 10000 }).catch(() => {});
+  const alert = await text("#error");
+  check(/chi/.test(alert) && (await page.$$eval("#orbits tbody tr", (t) => t.length)) === 0 &&
+        (await page.$eval("#portrait2", (s) => s.childNodes.length)) === 0,
+        "a bad chi: the daemon's problem, the old table and portraits cleared: " + alert);
 
-  console.log("explorer: loaded with the paper's orbit in " + loadMs + " ms; points per " +
-              "phase of the paper's orbit: " + JSON.stringify(out_points));
+  // a CORS failure explained: this page's origin is not the daemon's
+  const other = base.replace("127.0.0.1", "localhost");
+  await page.goto(base + "/?api=" + encodeURIComponent(other), { waitUntil: "networkidle0" });
+  await page.waitForSelector("#error:not([hidden])", { timeout: 10000 }).catch(() => {});
+  check(/--cors-origin/.test(await text("#error")), "a CORS failure says --cors-origin: " + await text("#error"));
+
+  // 4. physical units: continuation in Fr, its grazing at Fr = 6.1663
+  await page.goto(base + "/?units=physical", { waitUntil: "networkidle0" });
+  await page.waitForFunction(() => document.querySelectorAll("#orbits tbody tr").length > 0, { timeout: 30000 });
+  const opts = await page.$$eval("#continue-form select option", (o) => o.map((x) => x.value));
+  check(opts.includes("Fr") && !opts.includes("ur"), "in physical units the family offers " + opts);
+  await page.select("#continue-form select", "Fr");
+  await page.$eval("#continue-form input[name=from]", (e) => { e.value = "3"; });
+  await page.$eval("#continue-form input[name=to]", (e) => { e.value = "15"; });
+  await page.click("#continue-form button");
+  await page.waitForFunction(() => document.querySelectorAll("#family line.branch").length > 0 ||
+                                   !document.querySelector("#family-panel .error").hidden, { timeout: 60000 });
+  const famP = await page.evaluate(() => ({
+    special: [...document.querySelectorAll("#family .special-label")].map((t) => t.textContent),
+    x: document.querySelector("#family .xlabel").textContent,
+    y: document.querySelector("#portrait2 .ylabel").textContent }));
+  check(famP.special.some((s) => /grazing 6\.166/.test(s)) && /Fr \(M L\/s²\)/.test(famP.x) && /L\/s/.test(famP.y),
+        "the family in Fr grazes at 6.1663, axes in physical units: " + JSON.stringify(famP) +
+        (await shown("#family-panel .error")));
+  const dopts = await page.evaluate(() => {
+    document.getElementById("units").value = "dimensionless";
+    document.getElementById("units").dispatchEvent(new Event("change"));
+    return [...document.querySelectorAll("#continue-form select option")].map((x) => x.value);
+  });
+  check(dopts.includes("V"), "the dimensionless family offers V: " + dopts);
+
+  // 5. long work as jobs: a 100x100 map cancelled, another finished
+  await page.goto(base + "/?" + q + "&open=family&m.xn=100&m.yn=100&m.kind=overshoot", { waitUntil: "networkidle0" });
+  await page.waitForFunction(() => document.querySelectorAll("#family line.branch").length > 0, { timeout: 60000 });
+  await page.click("#map-form button[type=submit]");
+  await page.waitForFunction(() => /job: .* of 10000 done/.test(document.querySelector("#map-panel .status").textContent),
+                             { timeout: 20000 }).catch(() => {});
+  const during = await page.evaluate(() => ({
+    go: document.querySelector("#map-form button[type=submit]").disabled,
+    bar: !document.querySelector("#map-form progress").hidden,
+    cancel: !document.querySelector("#map-form .cancel").hidden }));
+  check(during.go && during.bar && during.cancel,
+        "while the map runs: its button disabled, a progress bar and a cancel button " + JSON.stringify(during));
+  const orbitMs = await page.evaluate(async () => {
+    const t = performance.now();
+    await fetch("/orbit", { method: "POST", headers: { "Content-Type": "application/json" },
+                            body: JSON.stringify({ params: { chi: 0.2, eta: 4, us: 0.0724, ur: 0.6178, V: 1 } }) });
+    return performance.now() - t;
+  });
+  check(orbitMs < 5000, "an /orbit during the map is not queued behind it: " + Math.round(orbitMs) + " ms");
+  await page.click("#map-form .cancel").catch(() => {});
+  await page.waitForFunction(() => /cancelled/.test(document.querySelector("#map-panel .status").textContent),
+                             { timeout: 20000 }).catch(() => {});
+  const jobs = await (await fetch(base + "/jobs")).json();
+  const maps = (jobs.jobs || []).filter((j) => j.processID === "map").map((j) => j.status);
+  check(/cancelled/.test(await text("#map-panel .status")) && maps.includes("dismissed") &&
+        !(await page.$eval("#map-form button[type=submit]", (b) => b.disabled)),
+        "cancelled: the job dismissed (" + maps + "), the button enabled again");
+  await page.$eval("#map-form input[name=max_period]", (e) => { e.value = "1"; });
+  await page.click("#map-form button[type=submit]");
+  const seen = new Set();
+  const tj = Date.now();
+  while (Date.now() - tj < 60000) {
+    const s = await page.evaluate(() => ({ v: document.querySelector("#map-form progress").value,
+                                          n: document.querySelectorAll("#map rect.cell").length }));
+    seen.add(s.v);
+    if (s.n)
+      break;
+    await new Promise((r) => setTimeout(r, 200));
+  }
+  const cells = await page.$$eval("#map rect.cell", (r) => r.length);
+  check(cells === 10000 && [...seen].some((v) => v > 0 && v < 100),
+        "a 100x100 map job finished with progress between (" + [...seen].join(" ") + "): " + cells + " cells " +
+        (await shown("#map-panel .error")));
+  await page.click("#basins-form button[type=submit]");
+  await page.waitForFunction(() => document.querySelectorAll("#basins image.basin").length > 0 ||
+                                   !document.querySelector("#basins-panel .error").hidden, { timeout: 60000 });
+  const legend = await page.$$eval("#basins .legend text", (ts) => ts.map((t) => t.textContent));
+  check(legend.some((l) => /overshoot/.test(l)), "the basins name the overshoot orbit: " + legend.join("; ") +
+        (await shown("#basins-panel .error")));
+  await page.screenshot({ path: out + "/explorer-families.png", fullPage: true });
+
+  // 6. axe-core, and 420 px
+  const a11y = await browser.newPage();
+  await a11y.setBypassCSP(true);
+  await a11y.setViewport({ width: 420, height: 900 });
+  await a11y.goto(base + "/?" + q + "&open=family", { waitUntil: "networkidle0" });
+  await a11y.waitForFunction(() => document.querySelectorAll("#family line.branch").length > 0, { timeout: 60000 });
+  await a11y.addScriptTag({ path: require.resolve("axe-core/axe.min.js") });
+  const axe = await a11y.evaluate(async () => (await window.axe.run()).violations
+    .filter((v) => v.impact === "serious" || v.impact === "critical")
+    .map((v) => v.id + " (" + v.impact + "): " + v.nodes.length));
+  check(axe.length === 0, "axe-core: no serious or critical violation: " + axe.join("; "));
+  const wide = await a11y.evaluate(() => ({
+    scroll: document.documentElement.scrollWidth,
+    over: [...document.querySelectorAll("body *")].filter((e) => !e.closest(".scroll") &&
+      e.getBoundingClientRect().right > window.innerWidth + 0.5).map((e) => e.tagName + "#" + e.id).slice(0, 5) }));
+  check(wide.scroll <= 420 && wide.over.length === 0, "at 420 px nothing overflows: " + JSON.stringify(wide));
+  await a11y.screenshot({ path: out + "/explorer-420.png", fullPage: true });
+
+  console.log("explorer: loaded with the paper's orbit in " + loadMs + " ms; all in " +
+              Math.round((Date.now() - t00) / 1000) + " s");
 } finally {
   await browser.close();
+  if (downloads)
+    fs.rmSync(downloads, { recursive: true, force: true });
 }
 console.log(checks + " checks, " + failures.length + " failures");
 process.exit(failures.length ? 1 : 0);
