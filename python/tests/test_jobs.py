@@ -7,7 +7,7 @@ And a daemon without jobs: the request is answered at once."""
 from __future__ import annotations
 
 import io
-from typing import Any, Dict, List
+from typing import Any, Callable, Dict, List
 
 import stickslip
 from conftest import PAPER, Daemon
@@ -90,14 +90,14 @@ def test_failed_job_raises() -> None:
             raise AssertionError("a failed job returned")
 
 
-def test_daemon_without_jobs_answers_at_once(daemon: Daemon,
-                                             client: stickslip.Client
-                                             ) -> None:
-    job = client.submit("/orbit", params=PAPER, kind="overshoot")
+def test_daemon_without_jobs_answers_at_once(
+        start: Callable[..., Daemon], client: stickslip.Client) -> None:
+    d = start("--no-jobs")
+    job = d.client().submit("/orbit", params=PAPER, kind="overshoot")
     assert job.id is None and job.status()["status"] == "successful"
     answer: List[Any] = list(job.results())
     assert answer[0]["orbits"] == client.orbit(
         params=PAPER, kind="overshoot")["orbits"]
-    lines = client.submit("/batch", requests=[
+    lines = d.client().submit("/batch", requests=[
         {"path": "/orbit", "body": {"params": PAPER}}]).results()
     assert [x["status"] for x in lines] == [200] and lines.done is not None
