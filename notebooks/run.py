@@ -3,7 +3,8 @@
 
   python3 notebooks/run.py STICKSLIPD NOTEBOOK [FIGURES_DIR]
 
-Starts STICKSLIPD on a free port, then `jupyter nbconvert --execute` (from
+Starts STICKSLIPD on a free port, with a job store of its own in a
+temporary directory, then `jupyter nbconvert --execute` (from
 Debian's jupyter-nbconvert) with STICKSLIP_URL set to it and the figures
 written to FIGURES_DIR (default: notebooks/figures, the ones the README
 shows); the executed notebook goes beside the figures.  Exits 77 (skipped)
@@ -14,6 +15,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -32,8 +34,11 @@ def main() -> int:
         print("notebooks: jupyter-nbconvert, python3-ipykernel, "
               "-matplotlib, -numpy or -pandas missing: skipped")
         return 77
+    state = tempfile.mkdtemp(prefix="stickslip-notebook-")
     d = subprocess.Popen([binary, "--port", "0", "--quiet",
-                          "--max-seconds", "120"],
+                          "--max-seconds", "120", "--state-dir", state,
+                          "--job-store",
+                          "sqlite:" + os.path.join(state, "jobs.sqlite")],
                          stderr=subprocess.PIPE, text=True)
     line = d.stderr.readline() if d.stderr else ""
     m = re.search(r"http://[^ \n]+", line)
@@ -52,6 +57,7 @@ def main() -> int:
     finally:
         d.terminate()
         d.wait()
+        shutil.rmtree(state, ignore_errors=True)
     return rc
 
 

@@ -16,7 +16,8 @@ from .errors import (BadFraming, BadRequest, BodyTooLarge,
                      InvalidJSON, InvalidType, InvalidValue, LimitExceeded,
                      MethodNotAllowed, MissingField, NoConvergence, NotFound,
                      OutOfMemory, Overloaded, ProblemError, RequestOverLimit,
-                     ShuttingDown, StickslipError, TransportError,
+                     ShuttingDown, StickslipError, StoreUnavailable,
+                     TransportError,
                      UnknownField, Unavailable, Unprocessable,
                      UnsupportedMediaType)
 from .jobs import Job, JobFailed
@@ -31,5 +32,5 @@ __all__ = [
     "InvalidValue", "MissingField", "UnknownField", "NoConvergence",
     "LimitExceeded", "RequestOverLimit", "ClientClosedRequest",
     "InternalError", "Unavailable", "Overloaded", "OutOfMemory",
-    "ShuttingDown",
+    "ShuttingDown", "StoreUnavailable",
 ]

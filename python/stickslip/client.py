@@ -189,12 +189,15 @@ class Client:
             lambda left: encode(dict(req, requests=[items[i] for i in left])))
 
     def batch_encoded(self, n: int,
-                      encoded: Callable[[List[int]], bytes]) -> Lines:
+                      encoded: Callable[[List[int]], bytes],
+                      first: Optional[Answer] = None) -> Lines:
         """POST /batch of ``n`` items whose body ``encoded(indexes)`` writes
         for those of the items given (all of them first, then those a cut
-        stream left without a line)."""
+        stream left without a line).  ``first``: the answer to the first
+        POST when it was already sent."""
         left = list(range(n))
-        first = self._t.open("POST", "/batch", encoded(left))
+        if first is None:
+            first = self._t.open("POST", "/batch", encoded(left))
         return Lines(self._batch_lines(encoded, left, first),
                      lambda line: line["index"])
 
@@ -231,7 +234,8 @@ class Client:
     def sweep(self, items: Iterable[Any], path: str = "/orbit",
               journal: Optional[str] = None, progress: bool = False,
               max_items: Optional[int] = None) -> List[JSON]:
-        """Many requests of one path, through /batch; see stickslip.sweep."""
+        """Many requests of one path, as /batch jobs (or batches when the
+        daemon runs no jobs); see stickslip.sweep."""
         from .sweep import sweep
         return sweep(self, items, path, journal, progress, max_items)
 

@@ -151,6 +151,12 @@ class ShuttingDown(Unavailable):
     """503 shutting-down: the daemon is draining."""
 
 
+class StoreUnavailable(Unavailable):
+    """503 store-unavailable: the job store cannot take a new job
+    (unreachable, full or read-only); synchronous requests are still
+    served."""
+
+
 _BY_TYPE: Dict[Tuple[str, int], Type[ProblemError]] = {
     ("invalid-json", 400): InvalidJSON,
     ("bad-request", 400): BadFraming,
@@ -169,6 +175,7 @@ _BY_TYPE: Dict[Tuple[str, int], Type[ProblemError]] = {
     ("overloaded", 503): Overloaded,
     ("out-of-memory", 503): OutOfMemory,
     ("shutting-down", 503): ShuttingDown,
+    ("store-unavailable", 503): StoreUnavailable,
 }
 
 _BY_STATUS: Dict[int, Type[ProblemError]] = {

@@ -29,6 +29,7 @@ if TYPE_CHECKING:
 
 JSON = Dict[str, Any]
 FINAL = ("successful", "failed", "dismissed")
+ASYNC = {"Prefer": "respond-async"}
 
 
 class JobFailed(StickslipError):
@@ -120,12 +121,14 @@ class Job:
     def _stream(self) -> Iterator[JSON]:
         read = 0  # the answer is the same bytes each time: skip what was read
         path = "%s/results" % self.location
-        for attempt in range(self._client.retries + 1):
+        failures = 0  # cuts in a row with no new line between them
+        while True:
             ans: Answer = self._client.open("GET", path)
             ctype = ans.header("Content-Type") or ""
             if "ndjson" not in ctype:
                 yield ans.json()
                 return
+            before = read
             try:
                 for i, line in enumerate(ans.lines()):
                     if i >= read:
@@ -136,27 +139,33 @@ class Job:
                 raise TransportError("the results ended before their last "
                                      "line")
             except TransportError:
-                if attempt == self._client.retries:
+                failures = 0 if read > before else failures + 1
+                if failures > self._client.retries:
                     raise
 
-    def cancel(self) -> None:
-        """DELETE /jobs/{id}: stop it, or remove its results."""
+    def cancel(self) -> JSON:
+        """DELETE /jobs/{id}: its work stops and its results are deleted;
+        its status document (dismissed), kept in ``last``."""
         if self.location is not None:
-            self._client.open("DELETE", self.location).read()
-            self.last = dict(self.last, status="dismissed")
+            self.last = self._client.request("DELETE", self.location)
+        return self.last
+
+
+def job_of(client: "Client", ans: Answer) -> Job:
+    """The Job of a 201 answer to a request with Prefer: respond-async."""
+    location = ans.header("Location")
+    if location is None:
+        raise StickslipError("201 without a Location")
+    if "://" in location:
+        location = "/" + location.split("://", 1)[1].split("/", 1)[1]
+    status: JSON = ans.json()
+    return Job(client, location, status)
 
 
 def submit(client: "Client", path: str, body: JSON) -> Job:
-    ans = client.open("POST", path, encode(body),
-                      {"Prefer": "respond-async"}, idempotent=False)
+    ans = client.open("POST", path, encode(body), ASYNC, idempotent=False)
     if ans.status == 201:
-        location = ans.header("Location")
-        if location is None:
-            raise StickslipError("201 without a Location")
-        if "://" in location:
-            location = "/" + location.split("://", 1)[1].split("/", 1)[1]
-        status: JSON = ans.json()
-        return Job(client, location, status)
+        return job_of(client, ans)
     ndjson = "ndjson" in (ans.header("Content-Type") or "")
     return Job(client, None, {"status": "successful", "progress": 100},
                ans.read(), ndjson)

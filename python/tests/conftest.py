@@ -1,13 +1,17 @@
 """The daemon the tests run against: STICKSLIPD in the environment or
 ``--stickslipd PATH`` (CTest passes the one it built); each started on a
-free port (``--port 0``), its URL read from its first line on stderr."""
+free port (``--port 0``), its URL read from its first line on stderr, with
+a job store of its own in a temporary directory (unless its flags name
+one, or --no-jobs)."""
 
 from __future__ import annotations
 
 import os
 import re
+import shutil
 import subprocess
 import sys
+import tempfile
 from typing import Iterator, List
 
 import pytest
@@ -26,15 +30,24 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 class Daemon:
     def __init__(self, binary: str, flags: List[str]) -> None:
+        self.tmp = tempfile.mkdtemp(prefix="stickslip-py-")
+        if "--no-jobs" not in flags and "--job-store" not in flags:
+            flags = ["--job-store",
+                     "sqlite:" + os.path.join(self.tmp, "jobs.sqlite"),
+                     *flags]
         self.proc = subprocess.Popen([binary, "--port", "0", "--quiet",
-                                      *flags], stderr=subprocess.PIPE,
-                                     text=True)
+                                      "--state-dir", self.tmp, *flags],
+                                     stderr=subprocess.PIPE, text=True)
         assert self.proc.stderr is not None
-        line = self.proc.stderr.readline()
-        m = re.search(r"http://[^ \n]+", line)
-        if not m:
-            self.proc.kill()
-            raise RuntimeError("stickslipd did not start: " + line)
+        said = ""
+        m = None
+        while m is None:  # notes (a store that cannot be opened) come first
+            line = self.proc.stderr.readline()
+            said += line
+            m = re.search(r"http://[^ \n]+", line)
+            if not line:
+                self.proc.kill()
+                raise RuntimeError("stickslipd did not start: " + said)
         self.url = m.group(0).rstrip("/")
 
     def client(self, **kw: object) -> stickslip.Client:
@@ -60,6 +73,7 @@ class Daemon:
         except subprocess.TimeoutExpired:
             self.proc.kill()
             self.proc.wait()
+        shutil.rmtree(self.tmp, ignore_errors=True)
 
 
 @pytest.fixture(scope="session")

@@ -1,17 +1,23 @@
-"""Jobs against a fake server in the test process that follows the jobs
-service's description (POST with Prefer: respond-async -> 201 + Location;
-GET /jobs/{id} status with progress and items; GET /jobs/{id}/results;
-DELETE /jobs/{id}); the live daemon's jobs are tested when it has them.
-And a daemon without jobs: the request is answered at once."""
+"""Jobs against the live daemon (POST with Prefer: respond-async -> 201 +
+Location; GET /jobs/{id}, its status; GET /jobs/{id}/results, the
+synchronous answer; DELETE /jobs/{id}): an /orbit and a /batch, progress,
+the plain progress line, results resumed after a cut, a dismissal, a failed
+job.  A fake server in the test process plays a job whose status moves one
+item a poll.  And a daemon without jobs: the request is answered at once."""
 
 from __future__ import annotations
 
 import io
-from typing import Any, Dict, List
+import re
+import time
+from typing import Any, Callable, Dict, List
+
+import pytest
 
 import stickslip
 from conftest import PAPER, Daemon
 from fake import FakeServer
+from proxy import CuttingProxy
 
 LINES = [{"id": i, "index": i, "status": 200, "body": {"n": i}}
          for i in range(4)] + [{"done": True, "ok": 4, "failed": 0}]
@@ -90,14 +96,129 @@ def test_failed_job_raises() -> None:
             raise AssertionError("a failed job returned")
 
 
-def test_daemon_without_jobs_answers_at_once(daemon: Daemon,
-                                             client: stickslip.Client
-                                             ) -> None:
-    job = client.submit("/orbit", params=PAPER, kind="overshoot")
+def test_daemon_without_jobs_answers_at_once(
+        start: Callable[..., Daemon], client: stickslip.Client) -> None:
+    d = start("--no-jobs")
+    job = d.client().submit("/orbit", params=PAPER, kind="overshoot")
     assert job.id is None and job.status()["status"] == "successful"
     answer: List[Any] = list(job.results())
     assert answer[0]["orbits"] == client.orbit(
         params=PAPER, kind="overshoot")["orbits"]
-    lines = client.submit("/batch", requests=[
+    lines = d.client().submit("/batch", requests=[
         {"path": "/orbit", "body": {"params": PAPER}}]).results()
     assert [x["status"] for x in lines] == [200] and lines.done is not None
+
+
+# the stick -> slip point of the paper's orbit; a motion from it to this
+# t_end takes a few hundredths of a second
+X0 = [1.2739277342427062, 4.3629277342427093, -0.80748713672430694, 1.0]
+
+
+def slow_batch(n: int, t_end: float = 4e5) -> List[Dict[str, Any]]:
+    return [{"id": i, "path": "/simulate",
+             "body": {"params": PAPER, "initial": X0, "t_end": t_end,
+                      "events": False}} for i in range(n)]
+
+
+def no_tqdm(monkeypatch: Any) -> io.StringIO:
+    """stderr as a string, and tqdm absent: the plain progress line."""
+    err = io.StringIO()
+    monkeypatch.setattr("sys.stderr", err)
+    monkeypatch.setitem(__import__("sys").modules, "tqdm", None)
+    monkeypatch.setitem(__import__("sys").modules, "tqdm.auto", None)
+    return err
+
+
+def without_seconds(done: Any) -> Any:
+    return {k: v for k, v in done.items() if k != "seconds"}
+
+
+def test_orbit_job(client: stickslip.Client) -> None:
+    job = client.submit("/orbit", params=PAPER, kind="overshoot")
+    assert job.id is not None and re.fullmatch(r"[0-9a-f]{32}", job.id)
+    assert job.location == "/jobs/" + job.id
+    st = job.status()
+    assert st["id"] == job.id and st["path"] == "/orbit"
+    assert st["processID"] == "orbit"
+    assert st["status"] in ("accepted", "running", "successful")
+    assert st["items"]["total"] == 1
+    final = job.wait(progress=False, poll=0.02, timeout=30)
+    assert final["status"] == "successful" and job.progress == 100
+    assert final["items"] == {"done": 1, "total": 1}
+    assert list(job.results()) == [client.orbit(params=PAPER,
+                                                kind="overshoot")]
+
+
+def test_batch_job_progress_and_results(client: stickslip.Client,
+                                        monkeypatch: Any) -> None:
+    reqs = slow_batch(96)
+    job = client.submit("/batch", requests=reqs)
+    assert job.last["status"] == "accepted" and job.progress == 0
+    assert job.last["items"] == {"done": 0, "total": 96}
+    seen = [job.progress]
+    while job.status()["status"] in ("accepted", "running"):
+        seen.append(job.progress)
+        time.sleep(0.02)
+    assert job.last["status"] == "successful"
+    seen.append(job.progress)
+    assert seen == sorted(seen) and seen[-1] == 100
+    assert len(set(seen)) >= 3  # seen between its start and its end
+    assert job.last["items"] == {"done": 96, "total": 96}
+    lines = job.results()
+    got = list(lines)
+    assert [x["index"] for x in got] == list(range(96))  # in index order
+    sync = client.batch(reqs)
+    assert got == sync.gather()
+    assert lines.done is not None and sync.done is not None
+    assert without_seconds(lines.done) == without_seconds(sync.done)
+    # wait() on a running job: the plain line moves to its items' total
+    err = no_tqdm(monkeypatch)
+    job = client.submit("/batch", requests=reqs)
+    job.wait(progress=True, poll=0.02, timeout=60)
+    shown = re.findall(r"job %s: (\d+)/96 \((\d+)%%\)" % job.id,
+                       err.getvalue())
+    assert len(shown) >= 2 and shown[-1] == ("96", "100")
+    assert [int(n) for n, _ in shown] == sorted(int(n) for n, _ in shown)
+
+
+def test_results_cut_resumed(daemon: Daemon) -> None:
+    proxy = CuttingProxy(daemon.url, keep=5, when=b"/results")
+    reqs = slow_batch(40, 1e5)
+    job = stickslip.Client(proxy.url).submit("/batch", requests=reqs)
+    lines = job.results()  # streamed while the job runs, cut after 5 lines
+    got = list(lines)
+    assert len(proxy.requests) == 2  # asked again once
+    assert [x["index"] for x in got] == list(range(40))
+    whole = daemon.client().batch(reqs)
+    assert got == whole.gather()
+    assert lines.done is not None and whole.done is not None
+    assert without_seconds(lines.done) == without_seconds(whole.done)
+
+
+def test_cancel_running_job(client: stickslip.Client) -> None:
+    job = client.submit("/batch", requests=slow_batch(512))
+    while job.status()["status"] != "running":
+        time.sleep(0.02)
+    st = job.cancel()
+    assert st["status"] == "dismissed" and job.last is st
+    assert job.status()["status"] == "dismissed"
+    with pytest.raises(stickslip.NotFound) as info:
+        list(job.results())
+    assert type(info.value) is stickslip.NotFound
+    assert info.value.status == 404 and info.value.kind == "not-found"
+    with pytest.raises(stickslip.JobFailed) as failed:
+        job.wait(progress=False)
+    assert failed.value.status["status"] == "dismissed"
+
+
+def test_failed_job_results_raise(start: Callable[..., Daemon]) -> None:
+    """A job over --job-max-seconds fails; its results are its problem."""
+    c = start("--job-max-seconds", "0.1").client()
+    job = c.submit("/simulate", params=PAPER, initial=X0, t_end=9e6,
+                   events=False)
+    with pytest.raises(stickslip.JobFailed) as info:
+        job.wait(progress=False, poll=0.02, timeout=30)
+    assert info.value.status["status"] == "failed"
+    assert info.value.status["message"]
+    with pytest.raises(stickslip.RequestOverLimit):
+        list(job.results())

@@ -100,3 +100,16 @@ def test_every_type_of_the_daemon_has_its_class() -> None:
         assert isinstance(e, by_status[int(status)]), kind
         assert type(e) is _BY_TYPE[(kind, int(status))], kind
         assert e.kind == kind and e.status == int(status)
+
+
+def test_store_unavailable(start: Callable[..., Daemon]) -> None:
+    """A job store that cannot be opened: a job is refused 503 with
+    Retry-After (retried, then raised); a synchronous request is served."""
+    d = start("--job-store", "sqlite:/dev/null/no/jobs.sqlite")
+    c = stickslip.Client(d.url, retries=1)
+    with pytest.raises(stickslip.StoreUnavailable) as info:
+        c.submit("/orbit", params=PAPER, kind="overshoot")
+    e = info.value
+    assert isinstance(e, stickslip.Unavailable) and e.status == 503
+    assert e.kind == "store-unavailable" and e.retry_after is not None
+    assert c.orbit(params=PAPER, kind="overshoot")["orbits"]

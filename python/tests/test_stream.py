@@ -5,66 +5,10 @@ again for what is missing and yields every line once."""
 from __future__ import annotations
 
 import json
-import socket
-import threading
-from typing import List
 
 import stickslip
 from conftest import PAPER, Daemon
-
-
-class CuttingProxy:
-    """Forwards each connection to the daemon; the first answer is cut
-    after ``keep`` lines of its body (the connection closed)."""
-
-    def __init__(self, target: str, keep: int) -> None:
-        host, port = target.split("//")[1].split(":")
-        self.target = (host, int(port))
-        self.keep = keep
-        self.requests: List[bytes] = []
-        self.sock = socket.socket()
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.listen(8)
-        self.url = "http://127.0.0.1:%d" % self.sock.getsockname()[1]
-        threading.Thread(target=self.serve, daemon=True).start()
-
-    def serve(self) -> None:
-        while True:
-            conn, _ = self.sock.accept()
-            cut = not self.requests
-            threading.Thread(target=self.one, args=(conn, cut),
-                             daemon=True).start()
-
-    def one(self, conn: socket.socket, cut: bool) -> None:
-        up = socket.create_connection(self.target)
-        req = b""
-        while b"\r\n\r\n" not in req:
-            req += conn.recv(65536)
-        head, body = req.split(b"\r\n\r\n", 1)
-        length = int(head.lower().split(b"content-length: ")[1]
-                     .split(b"\r\n")[0])
-        while len(body) < length:
-            body += conn.recv(65536)
-        self.requests.append(body)
-        up.sendall(head + b"\r\n\r\n" + body)
-        got = b""
-        while True:
-            data = up.recv(65536)
-            if not data:
-                break
-            got += data
-            if cut and got.count(b"}\n") >= self.keep:
-                # keep the first lines whole and half of the next one
-                end = 0
-                for _ in range(self.keep):
-                    end = got.index(b"}\n", end) + 2
-                conn.sendall(got[:end + 10])
-                break
-            if not cut:
-                conn.sendall(data)
-                got = b""
-        conn.close()
-        up.close()
+from proxy import CuttingProxy
 
 
 def test_batch_cut_resumed(daemon: Daemon) -> None:
