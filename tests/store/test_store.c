@@ -478,12 +478,52 @@ static void test_sqlite_faults(const char *path) {
   printf("unreachable: %s\n", why);
 }
 
-static void drop_pg_tables(void) {
-  PGconn *c = PQconnectdb(uri);
-  if (PQstatus(c) == CONNECTION_OK)
-    PQclear(PQexec(c, "DROP TABLE IF EXISTS stickslip_chunks, "
-                      "stickslip_jobs, stickslip_meta"));
+/* PostgreSQL: a database of this test's own in the cluster at @a base
+ * (created, or dropped when @a create is 0), so that other tests on the
+ * same cluster (the fixture pg) keep their tables; its URI into uri_buf.
+ * 0, or 1 with the reason printed. */
+static int pg_database(const char *base, int create) {
+  char name[64], sql[128];
+  snprintf(name, sizeof name, "ss_store_test_%ld", (long)getpid());
+  PGconn *c = PQconnectdb(base);
+  snprintf(sql, sizeof sql,
+           create ? "CREATE DATABASE %s" : "DROP DATABASE %s WITH (FORCE)",
+           name);
+  PGresult *r = PQstatus(c) == CONNECTION_OK ? PQexec(c, sql) : NULL;
+  int rc = PQresultStatus(r) == PGRES_COMMAND_OK ? 0 : 1;
+  if (rc)
+    fprintf(stderr, "%s: %s", sql, PQerrorMessage(c));
+  PQclear(r);
   PQfinish(c);
+  /* postgresql://user@host:port/DB?params: DB replaced, or added */
+  const char *host = strstr(base, "://"), *q = strchr(base, '?');
+  host = host ? host + 3 : base;
+  const char *slash = strchr(host, '/');
+  size_t head = slash && (!q || slash < q)
+                    ? (size_t)(slash - base)
+                    : (size_t)((q ? q : base + strlen(base)) - base);
+  snprintf(uri_buf, sizeof uri_buf, "%.*s/%s%s", (int)head, base, name,
+           q ? q : "");
+  return rc;
+}
+
+/* PostgreSQL: a connection broken under the store (its backend ended, as
+ * by a server restart) fails the call that finds it, and the next call
+ * connects again. */
+static void test_pg_broken(store *s) {
+  store_job g;
+  ASSERT_EQ_INT(store_get(s, RACE_ID, &g), 0);
+  PGconn *c = PQconnectdb(uri);
+  PGresult *r = PQexec(c, "SELECT pg_terminate_backend(pid) FROM "
+                          "pg_stat_activity WHERE datname = current_database() "
+                          "AND pid <> pg_backend_pid()");
+  ASSERT_TRUE(PQresultStatus(r) == PGRES_TUPLES_OK && PQntuples(r) >= 1);
+  PQclear(r);
+  PQfinish(c);
+  /* EVIDENCE: issue 30 §3, an unreachable store fails new jobs */
+  ASSERT_EQ_INT(store_get(s, RACE_ID, &g), STORE_ERROR);
+  printf("broken: %s\n", store_error(s));
+  ASSERT_EQ_INT(store_get(s, RACE_ID, &g), 0);
 }
 
 int main(int argc, char **argv) {
@@ -510,10 +550,14 @@ int main(int argc, char **argv) {
     uri = uri_buf;
   }
   int lite = !strncmp(uri, "sqlite:", 7);
+  char base[sizeof uri_buf];
+  snprintf(base, sizeof base, "%s", uri);
   if (lite)
     unlink(uri + 7);
+  else if (pg_database(base, 1))
+    return 1;
   else
-    drop_pg_tables();
+    uri = uri_buf;
   srand(7);
   store *s = open_store();
   printf("store: %s\n", store_kind(s));
@@ -521,8 +565,12 @@ int main(int argc, char **argv) {
   test_claims(s);
   test_fail_dismiss(s);
   test_race(s);
+  if (!lite)
+    test_pg_broken(s);
   store_close(s);
   if (lite)
     test_sqlite_faults(uri + 7);
+  else
+    ASSERT_EQ_INT(pg_database(base, 0), 0);
   TEST_DONE();
 }
