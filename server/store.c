@@ -19,7 +19,13 @@ struct store {
 };
 
 /* Results shorter than this are stored as they are: compressing them saves
- * too little to pay for the work. */
+ * too little to pay for the work.  Measured on the daemon's answers (zlib
+ * level 1, a shared 2-core machine): a 12x10 /map's NDJSON, 146 kB, to 29 %
+ * in 3.6 ms (level 6: 25 % in 6.5 ms), one of its lines (1.3 kB) to 43 %
+ * in 20 us; a /batch of 32 orbit searches, 267 kB, to 22 % in 3.3 ms
+ * (level 6: 17 % in 8.3 ms); a 32x32 /basins, 4.2 kB, to 33 %.  Reading
+ * back costs about half of that.  A chunk takes milliseconds to seconds to
+ * compute, so level 1 costs it little and stores a quarter to a third. */
 #define STORE_PACK_ABOVE 1024
 
 static _Thread_local char last_error[512];

@@ -17,7 +17,9 @@
  *   sqlite:PATH          libsqlite3, WAL; the embedded default
  *   postgresql://...     libpq; replicas share it (claims take
  *                        SELECT ... FOR UPDATE SKIP LOCKED)
- * Every function is thread-safe (each backend serialises what it must).
+ * Every function is thread-safe: a store holds one connection, used under
+ * a mutex of its own for the whole of each call (threads of one daemon
+ * wait for each other; replicas and other processes do not).
  * Times are seconds since the epoch (wall clock: replicas compare them).
  * Functions return 0 for done, STORE_NONE for "no such thing" where the
  * function says so, and STORE_ERROR when the store failed (unreachable,

@@ -52,7 +52,7 @@ static const char SCHEMA[] =
     " done int NOT NULL DEFAULT 0, owner text, lease double precision,"
     " packed int NOT NULL DEFAULT 0, result bytea, PRIMARY KEY(job, k));"
     "CREATE INDEX IF NOT EXISTS stickslip_chunks_open"
-    " ON stickslip_chunks(job, done, stage);"
+    " ON stickslip_chunks(job, stage, k) WHERE done = 0;"
     "INSERT INTO stickslip_meta VALUES('schema', '" SCHEMA_VERSION "')"
     " ON CONFLICT DO NOTHING;"
     "COMMIT;";
@@ -120,8 +120,8 @@ static int end(pgs *p, int rc) {
 
 /* Notices ("relation already exists, skipping") are not errors, and the
  * daemon's standard error is its log: libpq's are dropped. */
-static void quiet(void *cls, const char *message) {
-  (void)cls;
+static void quiet(void *arg, const char *message) {
+  (void)arg;
   (void)message;
 }
 
@@ -132,9 +132,18 @@ int store__pg_open(const char *uri, void **b, char *why, size_t n) {
     snprintf(why, n, "out of memory");
     return STORE_ERROR;
   }
-  p->db = PQconnectdb(uri);
-  pthread_mutex_init(&p->lock, NULL);
+  /* Defaults a URI may override (dbname, expanded from the URI, comes
+   * last): a connection attempt gives up after 5 s, and a server that stops
+   * answering fails a call within about 20 s (unacknowledged data, or
+   * keepalives unanswered) instead of hanging it. */
+  static const char *const keys[] = {"connect_timeout",  "keepalives",
+                                     "keepalives_idle",  "keepalives_interval",
+                                     "keepalives_count", "tcp_user_timeout",
+                                     "dbname",           NULL};
+  const char *vals[] = {"5", "1", "10", "3", "3", "20000", uri, NULL};
+  p->db = PQconnectdbParams(keys, vals, 1);
   PQsetNoticeProcessor(p->db, quiet, NULL);
+  pthread_mutex_init(&p->lock, NULL);
   int rc = 0;
   if (PQstatus(p->db) != CONNECTION_OK) {
     rc = fail_pg(p, "connect");
@@ -358,45 +367,62 @@ static int pg_list(void *b, long offset, size_t max, store_job *out, size_t *n,
   return rc;
 }
 
+/* Lease to @a owner until @a until the first chunk of job @a job that can
+ * be claimed at @a now: of its lowest stage not stored (a later stage
+ * waits for it), not stored, unleased or its lease ended, and not locked
+ * by another replica's claim at this moment (SKIP LOCKED: it takes the
+ * next one instead of waiting).  The partial index stickslip_chunks_open
+ * (the chunks not stored, in stage and k order) makes both the stage and
+ * the chunk its first entries, however many chunks are stored: a scan of
+ * the job's chunks took 6 ms a claim in a job of 5000.  0 and *k;
+ * STORE_NONE; STORE_ERROR. */
+static int claim_in(pgs *p, const char *job, const char *owner, num *now,
+                    num *until, long *k) {
+  const char *v[] = {job, now->s, owner, until->s};
+  PGresult *r =
+      q(p, "claim",
+        "WITH c AS (SELECT job, k FROM stickslip_chunks WHERE job = $1 AND "
+        "done = 0 AND stage = (SELECT min(stage) FROM stickslip_chunks WHERE "
+        "job = $1 AND done = 0) AND (owner IS NULL OR lease < $2) ORDER BY "
+        "stage, k LIMIT 1 FOR UPDATE SKIP LOCKED) "
+        "UPDATE stickslip_chunks s SET owner = $3, lease = $4 FROM c "
+        "WHERE s.job = c.job AND s.k = c.k RETURNING s.k",
+        4, v, NULL, NULL, 0);
+  int rc = !r ? STORE_ERROR : PQntuples(r) ? 0 : STORE_NONE;
+  if (!rc)
+    *k = atol(PQgetvalue(r, 0, 0));
+  PQclear(r);
+  if (rc)
+    return rc;
+  const char *w[] = {job, now->s};
+  long changed = cmd(p, "claim: its job",
+                     "UPDATE stickslip_jobs SET status = 1, updated = $2, "
+                     "started = CASE WHEN started = 0 THEN $2 ELSE started "
+                     "END WHERE n = $1 AND status IN (0, 1)",
+                     2, w);
+  /* none: the job finished under us, and its chunk with it */
+  return changed < 0 ? STORE_ERROR : changed ? 0 : STORE_NONE;
+}
+
+/* A chunk of the oldest job accepted or running that has one to claim. */
 static int pg_claim(void *b, const char *owner, double now, double lease,
                     char id[STORE_ID_LEN + 1], long *chunk) {
   pgs *p = b;
   enter(p);
   int rc = tx(p, "BEGIN");
   num t = dbl(now), until = dbl(now + lease);
-  const char *v[] = {t.s, owner, until.s};
-  PGresult *r =
-      rc ? NULL
-         : q(p, "claim",
-             "WITH c AS (SELECT c.job, c.k FROM stickslip_chunks c JOIN "
-             "stickslip_jobs j ON j.n = c.job WHERE j.status IN (0, 1) AND "
-             "c.done = 0 AND (c.owner IS NULL OR c.lease < $1) AND NOT "
-             "EXISTS (SELECT 1 FROM stickslip_chunks e WHERE e.job = c.job "
-             "AND e.done = 0 AND e.stage < c.stage) ORDER BY c.job, c.k "
-             "LIMIT 1 FOR UPDATE OF c SKIP LOCKED) "
-             "UPDATE stickslip_chunks s SET owner = $2, lease = $3 FROM c "
-             "WHERE s.job = c.job AND s.k = c.k RETURNING s.job, s.k",
-             3, v, NULL, NULL, 0);
+  PGresult *r = rc ? NULL
+                   : q(p, "claim: the jobs",
+                       "SELECT n, id FROM stickslip_jobs WHERE status IN "
+                       "(0, 1) ORDER BY n",
+                       0, NULL, NULL, NULL, 0);
   if (!rc && !r)
     rc = STORE_ERROR;
-  if (!rc && PQntuples(r) == 0)
-    rc = STORE_NONE;
-  if (!rc) {
-    *chunk = atol(PQgetvalue(r, 0, 1));
-    const char *w[] = {PQgetvalue(r, 0, 0), t.s};
-    PGresult *s = q(p, "claim: its job",
-                    "UPDATE stickslip_jobs SET status = 1, updated = $2, "
-                    "started = CASE WHEN started = 0 THEN $2 ELSE started "
-                    "END WHERE n = $1 AND status IN (0, 1) RETURNING id",
-                    2, w, NULL, NULL, 0);
-    if (!s)
-      rc = STORE_ERROR;
-    else if (PQntuples(s) != 1)
-      rc = STORE_NONE; /* finished under us: nothing to claim */
-    else
-      snprintf(id, STORE_ID_LEN + 1, "%s", PQgetvalue(s, 0, 0));
-    PQclear(s);
-  }
+  int i = 0, rows = r ? PQntuples(r) : 0;
+  for (rc = rc ? rc : STORE_NONE; rc == STORE_NONE && i < rows; i++)
+    rc = claim_in(p, PQgetvalue(r, i, 0), owner, &t, &until, chunk);
+  if (!rc)
+    snprintf(id, STORE_ID_LEN + 1, "%s", PQgetvalue(r, i - 1, 1));
   PQclear(r);
   rc = end(p, rc);
   leave(p);
@@ -456,6 +482,20 @@ static int pg_complete(void *b, const char *owner, const char *id, long chunk,
   return rc;
 }
 
+/* Lock the chunks of job @a id, in k order, before its row is written: a
+ * claim or a completion locks its chunk, then the job's row, so that
+ * taking the row first here would let each wait for the other (a deadlock
+ * that PostgreSQL breaks by failing one of them). */
+static int lock_chunks(pgs *p, const char *id) {
+  const char *v[] = {id};
+  return cmd(p, "lock the chunks",
+             "SELECT 1 FROM stickslip_chunks WHERE job = (SELECT n FROM "
+             "stickslip_jobs WHERE id = $1) ORDER BY k FOR UPDATE",
+             1, v) < 0
+             ? STORE_ERROR
+             : 0;
+}
+
 static int pg_fail(void *b, const char *id, const char *message, int status,
                    const char *problem, size_t len, double now) {
   pgs *p = b;
@@ -467,6 +507,8 @@ static int pg_fail(void *b, const char *id, const char *message, int status,
   const char *v[] = {id, message ? message : "", st.s, problem ? problem : "",
                      t.s};
   int lens[] = {0, 0, 0, (int)len, 0}, fmt[] = {0, 0, 0, 1, 0};
+  if (!rc)
+    rc = lock_chunks(p, id);
   PGresult *r = rc ? NULL
                    : q(p, "fail a job",
                        "UPDATE stickslip_jobs SET status = 3, message = $2, "
@@ -529,6 +571,8 @@ static int pg_dismiss(void *b, const char *id, double now) {
   int rc = tx(p, "BEGIN");
   num t = dbl(now);
   const char *v[] = {id, t.s};
+  if (!rc)
+    rc = lock_chunks(p, id);
   PGresult *r =
       rc ? NULL
          : q(p, "dismiss",

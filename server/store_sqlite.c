@@ -2,18 +2,22 @@
  * store_sqlite.c: the job store in one SQLite file (WAL), the embedded
  * default.
  *
- * One connection per store, used under a mutex: every call is a few
- * statements, so threads of one daemon wait little.  Daemons on one host
- * may share the file: writes take the database's write lock at their start
- * (BEGIN IMMEDIATE), so a claim reads and marks its chunk in one step, and
- * a busy lock is waited for (busy_timeout) rather than failed.
+ * One connection per store, used under a mutex (lite.lock, held for the
+ * whole of each call): every call is a few statements, so threads of one
+ * daemon wait little.  Daemons on one host may share the file: writes take
+ * the database's write lock at their start (BEGIN IMMEDIATE), so a claim
+ * reads and marks its chunk in one step, and a busy lock is waited for
+ * (busy_timeout, 5 s) rather than failed.
  *
  * The path is watched: a file deleted or replaced under a running daemon
  * would take its writes into an unlinked inode and lose them, so every call
  * first checks that the path still names the file that was opened, and
- * fails (STORE_ERROR) when it does not.  "sqlite:PATH?mode=ro" opens the
- * file read-only (every write then fails), as a store on a read-only
- * mount would.
+ * fails (STORE_ERROR) when it does not; a write also checks that the file
+ * may still be written (access(2): a file made read-only, or its directory
+ * remounted read-only, fails the write before SQLite writes through the
+ * descriptor it holds).  A file the process cannot write is opened
+ * read-only, its jobs readable and every write failed, and so is
+ * "sqlite:PATH?mode=ro".
  */
 #include <errno.h>
 #include <pthread.h>
@@ -23,6 +27,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/types.h>
+#include <unistd.h>
 
 #include "store_impl.h"
 
@@ -32,6 +37,7 @@ typedef struct lite {
   char path[4096];
   dev_t dev;
   ino_t ino;
+  int ro; /* opened read-only */
 } lite;
 
 #define SCHEMA_VERSION "1"
@@ -56,7 +62,8 @@ static const char SCHEMA[] =
     " done INTEGER NOT NULL DEFAULT 0, owner TEXT, lease REAL,"
     " packed INTEGER NOT NULL DEFAULT 0, result BLOB,"
     " PRIMARY KEY(job, k)) WITHOUT ROWID;"
-    "CREATE INDEX IF NOT EXISTS chunks_open ON chunks(job, done, stage);"
+    "CREATE INDEX IF NOT EXISTS chunks_open ON chunks(job, stage, k)"
+    " WHERE done = 0;"
     "INSERT OR IGNORE INTO meta VALUES('schema', '" SCHEMA_VERSION "');";
 
 static int fail_db(lite *l, const char *what) {
@@ -64,8 +71,9 @@ static int fail_db(lite *l, const char *what) {
                      sqlite3_errmsg(l->db));
 }
 
-/* Whether the path still names the file opened: 0, or STORE_ERROR. */
-static int watch(lite *l) {
+/* Whether the path still names the file opened, and, for a @a write,
+ * whether it may be written: 0, or STORE_ERROR. */
+static int watch(lite *l, int write) {
   struct stat st;
   if (stat(l->path, &st) != 0)
     return store__fail("sqlite store %s: %s (was it deleted?)", l->path,
@@ -73,12 +81,19 @@ static int watch(lite *l) {
   if (st.st_dev != l->dev || st.st_ino != l->ino)
     return store__fail("sqlite store %s: the file was replaced by another",
                        l->path);
+  if (write && l->ro)
+    return store__fail("sqlite store %s: opened read-only", l->path);
+  if (write && access(l->path, W_OK) != 0)
+    return store__fail("sqlite store %s: read-only: %s", l->path,
+                       strerror(errno));
   return 0;
 }
 
-static int enter(lite *l) {
+/* Take the store for a call (a @a write or not) once its file is watched:
+ * 0, or STORE_ERROR with the store not taken. */
+static int enter(lite *l, int write) {
   pthread_mutex_lock(&l->lock);
-  int rc = watch(l);
+  int rc = watch(l, write);
   if (rc)
     pthread_mutex_unlock(&l->lock);
   return rc;
@@ -129,74 +144,6 @@ static int run(lite *l, sqlite3_stmt *st) {
   return rc == SQLITE_DONE ? 0 : fail_db(l, "write");
 }
 
-int store__sqlite_open(const char *where, void **b, char *why, size_t n) {
-  *b = NULL;
-  lite *l = calloc(1, sizeof *l);
-  if (!l) {
-    snprintf(why, n, "out of memory");
-    return STORE_ERROR;
-  }
-  const char *q = strchr(where, '?');
-  size_t plen = q ? (size_t)(q - where) : strlen(where);
-  int ro = q && strstr(q, "mode=ro");
-  if (plen == 0 || plen >= sizeof l->path) {
-    snprintf(why, n, "sqlite store: no path, or a path too long");
-    free(l);
-    return STORE_ERROR;
-  }
-  memcpy(l->path, where, plen);
-  int flags =
-      ro ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
-  /* its directory, when missing (one level: a state directory) */
-  char dir[sizeof l->path];
-  memcpy(dir, l->path, sizeof dir);
-  char *slash = strrchr(dir, '/');
-  if (!ro && slash && slash != dir) {
-    *slash = 0;
-    mkdir(dir, 0750);
-  }
-  if (sqlite3_open_v2(l->path, &l->db, flags | SQLITE_OPEN_FULLMUTEX, NULL) !=
-      SQLITE_OK) {
-    snprintf(why, n, "sqlite store %s: %s", l->path,
-             l->db ? sqlite3_errmsg(l->db) : "out of memory");
-    sqlite3_close(l->db);
-    free(l);
-    return STORE_ERROR;
-  }
-  sqlite3_busy_timeout(l->db, 5000);
-  pthread_mutex_init(&l->lock, NULL);
-  int rc = exec(l, "PRAGMA foreign_keys=ON");
-  if (!rc && !ro)
-    rc = exec(l, "PRAGMA journal_mode=WAL;PRAGMA synchronous=NORMAL;");
-  if (!rc && !ro)
-    rc = exec(l, SCHEMA);
-  if (!rc) {
-    /* a file of another schema is not ours to write */
-    sqlite3_stmt *st = prep(l, "SELECT value FROM meta WHERE key='schema'");
-    rc = st ? 0 : STORE_ERROR;
-    if (st &&
-        (sqlite3_step(st) != SQLITE_ROW ||
-         strcmp((const char *)sqlite3_column_text(st, 0), SCHEMA_VERSION) != 0))
-      rc = store__fail("sqlite store %s: not a job store of schema %s", l->path,
-                       SCHEMA_VERSION);
-    sqlite3_finalize(st);
-  }
-  struct stat sb;
-  if (!rc && stat(l->path, &sb) != 0)
-    rc = store__fail("sqlite store %s: %s", l->path, strerror(errno));
-  if (rc) {
-    snprintf(why, n, "%s", store_error(NULL));
-    sqlite3_close(l->db);
-    pthread_mutex_destroy(&l->lock);
-    free(l);
-    return STORE_ERROR;
-  }
-  l->dev = sb.st_dev;
-  l->ino = sb.st_ino;
-  *b = l;
-  return 0;
-}
-
 static void lite_close(void *b) {
   lite *l = b;
   if (!l)
@@ -206,13 +153,97 @@ static void lite_close(void *b) {
   free(l);
 }
 
+/* The directories of @a path that are missing, as mkdir -p makes them
+ * (a state directory and its parents). */
+static void make_dirs(const char *path) {
+  char dir[4096];
+  snprintf(dir, sizeof dir, "%s", path);
+  for (char *p = strchr(dir + 1, '/'); p; p = strchr(p + 1, '/')) {
+    *p = 0;
+    if (mkdir(dir, 0750) != 0 && errno != EEXIST)
+      return; /* the open that follows says why */
+    *p = '/';
+  }
+}
+
+/* The tables, or, in a file that cannot be written, the check that they
+ * are there: a file of another schema is not ours to write. */
+static int set_up(lite *l) {
+  int rc = exec(l, "PRAGMA foreign_keys=ON");
+  if (!rc && !l->ro)
+    rc = exec(l, "PRAGMA journal_mode=WAL;PRAGMA synchronous=NORMAL;");
+  if (!rc && !l->ro)
+    rc = exec(l, SCHEMA);
+  sqlite3_stmt *st =
+      rc ? NULL : prep(l, "SELECT value FROM meta WHERE key='schema'");
+  if (!rc && !st)
+    rc = STORE_ERROR;
+  if (st &&
+      (sqlite3_step(st) != SQLITE_ROW ||
+       strcmp((const char *)sqlite3_column_text(st, 0), SCHEMA_VERSION) != 0))
+    rc = store__fail("sqlite store %s: not a job store of schema %s", l->path,
+                     SCHEMA_VERSION);
+  sqlite3_finalize(st);
+  struct stat sb;
+  if (!rc && stat(l->path, &sb) != 0)
+    rc = store__fail("sqlite store %s: %s", l->path, strerror(errno));
+  if (!rc) {
+    l->dev = sb.st_dev;
+    l->ino = sb.st_ino;
+  }
+  return rc;
+}
+
+/* @a where: PATH, or PATH?mode=ro. */
+int store__sqlite_open(const char *where, void **b, char *why, size_t n) {
+  *b = NULL;
+  const char *q = strchr(where, '?');
+  size_t plen = q ? (size_t)(q - where) : strlen(where);
+  lite *l = calloc(1, sizeof *l);
+  if (!l || plen == 0 || plen >= sizeof l->path ||
+      (q && strcmp(q, "?mode=ro") != 0)) {
+    snprintf(why, n, "sqlite store %s: %s", where,
+             !l          ? "out of memory"
+             : q && plen ? "the only parameter known is ?mode=ro"
+                         : "no path, or a path too long");
+    free(l);
+    return STORE_ERROR;
+  }
+  memcpy(l->path, where, plen);
+  l->ro = q != NULL;
+  if (!l->ro)
+    make_dirs(l->path);
+  int flags =
+      l->ro ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE;
+  int rc = sqlite3_open_v2(l->path, &l->db, flags | SQLITE_OPEN_FULLMUTEX,
+                           NULL) == SQLITE_OK
+               ? 0
+               : store__fail("sqlite store %s: %s", l->path,
+                             l->db ? sqlite3_errmsg(l->db) : "out of memory");
+  /* SQLite opens a file it may not write read-only */
+  if (!rc && sqlite3_db_readonly(l->db, "main") == 1)
+    l->ro = 1;
+  pthread_mutex_init(&l->lock, NULL);
+  if (!rc) {
+    sqlite3_busy_timeout(l->db, 5000);
+    rc = set_up(l);
+  }
+  if (rc) {
+    snprintf(why, n, "%s", store_error(NULL));
+    lite_close(l);
+    return STORE_ERROR;
+  }
+  *b = l;
+  return 0;
+}
+
 static int lite_submit(void *b, const store_job *j, const char *body,
                        size_t len, const store_chunk *chunks, size_t n) {
   lite *l = b;
   long items = 0;
   for (size_t k = 0; k < n; k++)
     items += chunks[k].items;
-  if (enter(l))
+  if (enter(l, 1))
     return STORE_ERROR;
   int rc = begin(l);
   sqlite3_stmt *st = rc ? NULL
@@ -276,7 +307,7 @@ static void read_job(sqlite3_stmt *st, store_job *o) {
 
 static int lite_get(void *b, const char *id, store_job *out) {
   lite *l = b;
-  if (enter(l))
+  if (enter(l, 0))
     return STORE_ERROR;
   sqlite3_stmt *st = prep(l, "SELECT " JOB_COLUMNS " FROM jobs WHERE id = ?");
   int rc = st ? STORE_NONE : STORE_ERROR;
@@ -324,7 +355,7 @@ static int read_blob(lite *l, sqlite3_stmt *st, int col, char **buf,
 
 static int lite_body(void *b, const char *id, char **body, size_t *len) {
   lite *l = b;
-  if (enter(l))
+  if (enter(l, 0))
     return STORE_ERROR;
   sqlite3_stmt *st = prep(l, "SELECT body FROM jobs WHERE id = ?");
   int rc = STORE_ERROR;
@@ -342,7 +373,7 @@ static int lite_list(void *b, long offset, size_t max, store_job *out,
   lite *l = b;
   *n = 0;
   *total = 0;
-  if (enter(l))
+  if (enter(l, 0))
     return STORE_ERROR;
   sqlite3_stmt *st = prep(l, "SELECT count(*) FROM jobs");
   int rc = st ? 0 : STORE_ERROR;
@@ -370,63 +401,96 @@ static int lite_list(void *b, long offset, size_t max, store_job *out,
   return rc;
 }
 
-/* A chunk is claimable when its job is accepted or running, it is not
- * stored, unleased or its lease has ended, and no chunk of an earlier
- * stage of its job is unstored. */
+/* The first chunk of job @a job that can be claimed at @a now: of the
+ * lowest stage that has a chunk not stored (a later stage waits for it),
+ * not stored, unleased or its lease ended.  The index chunks_open holds
+ * the chunks not stored alone, in (stage, k) order, so that both the stage
+ * and the chunk are its first entries (past the few leased), however many
+ * of the job's chunks are stored; it is named, because without statistics
+ * the planner took the primary key and scanned the stored chunks at each
+ * claim: 15 ms a claim in a job of 8000 chunks, 118 s to claim them all.
+ * 0 and *k; STORE_NONE; STORE_ERROR. */
+static int pick_chunk(lite *l, sqlite3_int64 job, double now,
+                      sqlite3_int64 *k) {
+  sqlite3_stmt *st =
+      prep(l, "SELECT k FROM chunks INDEXED BY chunks_open WHERE job = ?1 AND "
+              "done = 0 AND stage = (SELECT min(stage) FROM chunks INDEXED BY "
+              "chunks_open WHERE job = ?1 AND done = 0) "
+              "AND (owner IS NULL OR lease < ?2) ORDER BY stage, k LIMIT 1");
+  if (!st)
+    return STORE_ERROR;
+  sqlite3_bind_int64(st, 1, job);
+  sqlite3_bind_double(st, 2, now);
+  int s = sqlite3_step(st), rc = 0;
+  if (s == SQLITE_ROW)
+    *k = sqlite3_column_int64(st, 0);
+  else
+    rc = s == SQLITE_DONE ? STORE_NONE : fail_db(l, "claim");
+  sqlite3_finalize(st);
+  return rc;
+}
+
+/* A claimable chunk of the oldest job accepted or running that has one:
+ * 0 with *job, id and *k; STORE_NONE; STORE_ERROR. */
+static int pick(lite *l, double now, sqlite3_int64 *job,
+                char id[STORE_ID_LEN + 1], sqlite3_int64 *k) {
+  sqlite3_stmt *st =
+      prep(l, "SELECT n, id FROM jobs WHERE status IN (0, 1) ORDER BY n");
+  if (!st)
+    return STORE_ERROR;
+  int rc = STORE_NONE, s = SQLITE_DONE;
+  while (rc == STORE_NONE && (s = sqlite3_step(st)) == SQLITE_ROW) {
+    *job = sqlite3_column_int64(st, 0);
+    rc = pick_chunk(l, *job, now, k);
+    if (!rc)
+      snprintf(id, STORE_ID_LEN + 1, "%s",
+               (const char *)sqlite3_column_text(st, 1));
+  }
+  if (rc == STORE_NONE && s != SQLITE_DONE)
+    rc = fail_db(l, "claim");
+  sqlite3_finalize(st);
+  return rc;
+}
+
+/* Lease chunk @a k of @a job to @a owner until @a until; the job running
+ * from @a now if it was accepted. */
+static int lease_chunk(lite *l, sqlite3_int64 job, sqlite3_int64 k,
+                       const char *owner, double now, double until) {
+  sqlite3_stmt *st = prep(l, "UPDATE chunks SET owner = ?, lease = ? "
+                             "WHERE job = ? AND k = ?");
+  if (!st)
+    return STORE_ERROR;
+  sqlite3_bind_text(st, 1, owner, -1, SQLITE_STATIC);
+  sqlite3_bind_double(st, 2, until);
+  sqlite3_bind_int64(st, 3, job);
+  sqlite3_bind_int64(st, 4, k);
+  int rc = run(l, st);
+  if (rc)
+    return rc;
+  st = prep(l, "UPDATE jobs SET status = 1, updated = ?1, started = "
+               "CASE WHEN started = 0 THEN ?1 ELSE started END "
+               "WHERE n = ?2 AND status = 0");
+  if (!st)
+    return STORE_ERROR;
+  sqlite3_bind_double(st, 1, now);
+  sqlite3_bind_int64(st, 2, job);
+  return run(l, st);
+}
+
+/* The pick and the lease in one write transaction (BEGIN IMMEDIATE), so
+ * that another connection to the file cannot take the same chunk between
+ * them. */
 static int lite_claim(void *b, const char *owner, double now, double lease,
                       char id[STORE_ID_LEN + 1], long *chunk) {
   lite *l = b;
-  if (enter(l))
+  if (enter(l, 1))
     return STORE_ERROR;
-  int rc = begin(l);
-  sqlite3_stmt *st =
-      rc ? NULL
-         : prep(l, "SELECT j.n, j.id, c.k FROM jobs j JOIN chunks c "
-                   "ON c.job = j.n WHERE j.status IN (0, 1) AND c.done = 0 "
-                   "AND (c.owner IS NULL OR c.lease < ?) AND NOT EXISTS "
-                   "(SELECT 1 FROM chunks e WHERE e.job = j.n AND e.done = 0 "
-                   "AND e.stage < c.stage) ORDER BY j.n, c.k LIMIT 1");
-  if (!rc && !st)
-    rc = STORE_ERROR;
   sqlite3_int64 job = 0, k = 0;
-  if (!rc) {
-    sqlite3_bind_double(st, 1, now);
-    int s = sqlite3_step(st);
-    if (s == SQLITE_ROW) {
-      job = sqlite3_column_int64(st, 0);
-      snprintf(id, STORE_ID_LEN + 1, "%s",
-               (const char *)sqlite3_column_text(st, 1));
-      k = sqlite3_column_int64(st, 2);
-    } else {
-      rc = s == SQLITE_DONE ? STORE_NONE : fail_db(l, "claim");
-    }
-  }
-  sqlite3_finalize(st);
-  if (!rc) {
-    st = prep(l, "UPDATE chunks SET owner = ?, lease = ? "
-                 "WHERE job = ? AND k = ?");
-    if (!st) {
-      rc = STORE_ERROR;
-    } else {
-      sqlite3_bind_text(st, 1, owner, -1, SQLITE_STATIC);
-      sqlite3_bind_double(st, 2, now + lease);
-      sqlite3_bind_int64(st, 3, job);
-      sqlite3_bind_int64(st, 4, k);
-      rc = run(l, st);
-    }
-  }
-  if (!rc) {
-    st = prep(l, "UPDATE jobs SET status = 1, updated = ?1, started = "
-                 "CASE WHEN started = 0 THEN ?1 ELSE started END "
-                 "WHERE n = ?2 AND status = 0");
-    if (!st) {
-      rc = STORE_ERROR;
-    } else {
-      sqlite3_bind_double(st, 1, now);
-      sqlite3_bind_int64(st, 2, job);
-      rc = run(l, st);
-    }
-  }
+  int rc = begin(l);
+  if (!rc)
+    rc = pick(l, now, &job, id, &k);
+  if (!rc)
+    rc = lease_chunk(l, job, k, owner, now, now + lease);
   if (!rc)
     *chunk = (long)k;
   rc = rc ? rollback(l, rc) : commit(l);
@@ -443,7 +507,7 @@ static int lite_claim(void *b, const char *owner, double now, double lease,
 static int lite_renew(void *b, const char *owner, const char *id, long chunk,
                       double until) {
   lite *l = b;
-  if (enter(l))
+  if (enter(l, 1))
     return STORE_ERROR;
   sqlite3_stmt *st = prep(l, "UPDATE chunks SET lease = ?4 WHERE " HELD);
   int rc = STORE_ERROR;
@@ -464,7 +528,7 @@ static int lite_complete(void *b, const char *owner, const char *id, long chunk,
                          const void *result, size_t len, int packed,
                          double now) {
   lite *l = b;
-  if (enter(l))
+  if (enter(l, 1))
     return STORE_ERROR;
   int rc = begin(l);
   sqlite3_stmt *st =
@@ -507,7 +571,7 @@ static int lite_complete(void *b, const char *owner, const char *id, long chunk,
 static int lite_fail(void *b, const char *id, const char *message, int status,
                      const char *problem, size_t len, double now) {
   lite *l = b;
-  if (enter(l))
+  if (enter(l, 1))
     return STORE_ERROR;
   int rc = begin(l);
   sqlite3_stmt *st =
@@ -546,7 +610,7 @@ static int lite_fail(void *b, const char *id, const char *message, int status,
 static int lite_result(void *b, const char *id, long chunk, char **buf,
                        size_t *len, int *packed) {
   lite *l = b;
-  if (enter(l))
+  if (enter(l, 0))
     return STORE_ERROR;
   sqlite3_stmt *st = prep(l, "SELECT result, packed FROM chunks WHERE job = "
                              "(SELECT n FROM jobs WHERE id = ?) AND k = ? "
@@ -565,7 +629,7 @@ static int lite_result(void *b, const char *id, long chunk, char **buf,
 static int lite_problem(void *b, const char *id, int *status, char **body,
                         size_t *len) {
   lite *l = b;
-  if (enter(l))
+  if (enter(l, 0))
     return STORE_ERROR;
   sqlite3_stmt *st = prep(l, "SELECT problem, problem_status FROM jobs "
                              "WHERE id = ? AND status = 3");
@@ -581,7 +645,7 @@ static int lite_problem(void *b, const char *id, int *status, char **body,
 
 static int lite_dismiss(void *b, const char *id, double now) {
   lite *l = b;
-  if (enter(l))
+  if (enter(l, 1))
     return STORE_ERROR;
   int rc = begin(l);
   sqlite3_stmt *st =
@@ -618,7 +682,7 @@ static int lite_counts(void *b, long by_status[5], long *chunks_pending) {
   for (int i = 0; i < 5; i++)
     by_status[i] = 0;
   *chunks_pending = 0;
-  if (enter(l))
+  if (enter(l, 0))
     return STORE_ERROR;
   sqlite3_stmt *st =
       prep(l, "SELECT status, count(*) FROM jobs GROUP BY status");
@@ -632,8 +696,9 @@ static int lite_counts(void *b, long by_status[5], long *chunks_pending) {
     rc = fail_db(l, "count jobs");
   sqlite3_finalize(st);
   st = rc ? NULL
-          : prep(l, "SELECT count(*) FROM chunks c JOIN jobs j ON j.n = "
-                    "c.job WHERE j.status IN (0, 1) AND c.done = 0");
+          : prep(l, "SELECT count(*) FROM jobs j JOIN chunks c INDEXED BY "
+                    "chunks_open ON c.job = j.n WHERE j.status IN (0, 1) "
+                    "AND c.done = 0");
   if (!rc && !st)
     rc = STORE_ERROR;
   if (st && sqlite3_step(st) == SQLITE_ROW)
@@ -648,7 +713,7 @@ static int lite_counts(void *b, long by_status[5], long *chunks_pending) {
 static int lite_expire(void *b, double before, long *n) {
   lite *l = b;
   *n = 0;
-  if (enter(l))
+  if (enter(l, 1))
     return STORE_ERROR;
   int rc = begin(l);
   /* the chunks go with their job (ON DELETE CASCADE) */

@@ -13,12 +13,20 @@
  * one job exactly once; and for SQLite, the file deleted or opened
  * read-only: every write fails.
  */
+#define _GNU_SOURCE /* unshare */
+#include <errno.h>
 #include <libpq-fe.h>
 #include <pthread.h>
+#include <sched.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mount.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "store.h"
@@ -288,15 +296,97 @@ static void test_race(store *s1) {
   store_close(s2);
 }
 
-/* SQLite: the file deleted under the store, and a read-only store. */
-static void test_sqlite_faults(const char *path) {
-  store *s = open_store();
+/* A job of one chunk with a body of @a len bytes: store_submit's code. */
+static int submit_one(store *s, const char *id, size_t len) {
+  char *body = calloc(1, len + 1);
   store_chunk c[1] = {{0, 1}};
   store_job j;
-  make_job(&j, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee5", "/orbit", 6000);
-  ASSERT_EQ_INT(store_submit(s, &j, "{}", 2, c, 1), 0);
-  store_close(s);
+  make_job(&j, id, "/orbit", 6000);
+  for (size_t i = 0; i < len; i++)
+    body[i] = (char)('a' + rand() % 26); /* not compressible to nothing */
+  int rc = store_submit(s, &j, body, len, c, 1);
+  free(body);
+  return rc;
+}
 
+/* The directory @a dir made read-only for this process: as another user
+ * than root, its file's mode; as root, which permissions do not stop, a
+ * read-only bind mount of the directory on itself in a mount namespace of
+ * this (forked) process alone.  0, or 77 when neither can be done. */
+static int make_read_only(const char *dir, const char *file) {
+  if (geteuid() != 0)
+    return chmod(file, 0444) == 0 && chmod(dir, 0555) == 0 ? 0 : 77;
+  if (unshare(CLONE_NEWNS) != 0 ||
+      mount(NULL, "/", NULL, MS_REC | MS_PRIVATE, NULL) != 0 ||
+      mount(dir, dir, NULL, MS_BIND, NULL) != 0 ||
+      mount(NULL, dir, NULL, MS_REMOUNT | MS_BIND | MS_RDONLY, NULL) != 0) {
+    printf("read-only: no mount namespace (%s)\n", strerror(errno));
+    return 77;
+  }
+  return 0;
+}
+
+/* In a child process: a store opened writable whose directory is then
+ * made read-only fails its writes and still reads; a store opened on the
+ * read-only directory is opened read-only, the same.  The child's exit
+ * code: its failures, or 77 when it could not make the directory
+ * read-only. */
+static int read_only_child(const char *dir, const char *file) {
+  char u[1300];
+  snprintf(u, sizeof u, "sqlite:%s", file);
+  store *s = NULL, *r = NULL;
+  char why[512], id[STORE_ID_LEN + 1];
+  long k;
+  store_job g;
+  ASSERT_EQ_INT(store_open(u, &s, why, sizeof why), 0);
+  ASSERT_EQ_INT(submit_one(s, "ffffffffffffffffffffffffffffff01", 10), 0);
+  int rc = make_read_only(dir, file);
+  if (rc) {
+    store_close(s);
+    return rc;
+  }
+  /* EVIDENCE: issue 30 §3, a read-only store fails new jobs */
+  ASSERT_EQ_INT(submit_one(s, "ffffffffffffffffffffffffffffff02", 10),
+                STORE_ERROR);
+  printf("made read-only: %s\n", store_error(s));
+  ASSERT_TRUE(strstr(store_error(s), "read-only") != NULL);
+  ASSERT_EQ_INT(store_claim(s, "r", 6002, 10, id, &k), STORE_ERROR);
+  ASSERT_EQ_INT(store_get(s, "ffffffffffffffffffffffffffffff01", &g), 0);
+  store_close(s);
+  ASSERT_EQ_INT(store_open(u, &r, why, sizeof why), 0);
+  if (r) {
+    ASSERT_EQ_INT(store_get(r, "ffffffffffffffffffffffffffffff01", &g), 0);
+    ASSERT_EQ_INT(submit_one(r, "ffffffffffffffffffffffffffffff03", 10),
+                  STORE_ERROR);
+    printf("opened read-only: %s\n", store_error(r));
+    store_close(r);
+  }
+  return test_failures_ ? 1 : 0;
+}
+
+/* A store made read-only under it (read_only_child), or, where this
+ * process cannot do that, opened with ?mode=ro. */
+static void test_read_only(const char *path) {
+  char dir[1100], file[1200];
+  snprintf(dir, sizeof dir, "%s.ro", path);
+  snprintf(file, sizeof file, "%s/store.sqlite", dir);
+  pid_t pid = fork();
+  if (pid == 0) {
+    int rc = read_only_child(dir, file);
+    fflush(stdout);
+    _exit(rc);
+  }
+  int st = 0;
+  waitpid(pid, &st, 0);
+  int code = WIFEXITED(st) ? WEXITSTATUS(st) : 1;
+  chmod(dir, 0755);
+  char cmd[1300];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  ASSERT_EQ_INT(system(cmd), 0);
+  if (code != 77) {
+    ASSERT_EQ_INT(code, 0);
+    return;
+  }
   char ro[1200];
   snprintf(ro, sizeof ro, "%s?mode=ro", uri);
   store *r = NULL;
@@ -304,26 +394,77 @@ static void test_sqlite_faults(const char *path) {
   ASSERT_EQ_INT(store_open(ro, &r, why, sizeof why), 0);
   if (r) {
     store_job g;
-    ASSERT_EQ_INT(store_get(r, j.id, &g), 0);
-    make_job(&j, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee6", "/orbit", 6001);
-    ASSERT_EQ_INT(store_submit(r, &j, "{}", 2, c, 1), STORE_ERROR);
-    printf("read-only: %s\n", store_error(r));
-    char id[STORE_ID_LEN + 1];
-    long k;
-    ASSERT_EQ_INT(store_claim(r, "r", 6002, 10, id, &k), STORE_ERROR);
+    ASSERT_EQ_INT(store_get(r, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee5", &g), 0);
+    ASSERT_EQ_INT(submit_one(r, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee6", 10),
+                  STORE_ERROR);
+    printf("?mode=ro: %s\n", store_error(r));
     store_close(r);
   }
+}
 
+/* A full disk, as a file size limit (RLIMIT_FSIZE, which root obeys too):
+ * the write that does not fit fails, the store is intact and takes the
+ * next write once there is room. */
+static void test_full(void) {
+  store *s = open_store();
+  struct rlimit old, low = {256 * 1024, 0};
+  getrlimit(RLIMIT_FSIZE, &old);
+  low.rlim_max = old.rlim_max;
+  signal(SIGXFSZ, SIG_IGN);
+  ASSERT_EQ_INT(setrlimit(RLIMIT_FSIZE, &low), 0);
+  ASSERT_EQ_INT(submit_one(s, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeee10", 1 << 20),
+                STORE_ERROR);
+  printf("full: %s\n", store_error(s));
+  setrlimit(RLIMIT_FSIZE, &old);
+  store_job g;
+  ASSERT_EQ_INT(store_get(s, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeee10", &g),
+                STORE_NONE);
+  ASSERT_EQ_INT(submit_one(s, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeee11", 1 << 20), 0);
+  store_close(s);
+}
+
+/* SQLite: the file deleted or replaced under the store, read-only, full;
+ * its directories made when missing. */
+static void test_sqlite_faults(const char *path) {
+  store *s = open_store();
+  ASSERT_EQ_INT(submit_one(s, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee5", 2), 0);
+  store_close(s);
+  test_read_only(path);
+  test_full();
+
+  /* EVIDENCE: issue 30 §3, a store whose file was deleted fails new jobs */
   s = open_store();
   ASSERT_EQ_INT(unlink(path), 0);
-  make_job(&j, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee7", "/orbit", 6003);
-  ASSERT_EQ_INT(store_submit(s, &j, "{}", 2, c, 1), STORE_ERROR);
+  ASSERT_EQ_INT(submit_one(s, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee7", 2),
+                STORE_ERROR);
   printf("deleted: %s\n", store_error(s));
   ASSERT_TRUE(strstr(store_error(s), "deleted") != NULL);
   store_job g;
   ASSERT_EQ_INT(store_get(s, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee5", &g),
                 STORE_ERROR);
   store_close(s);
+  /* replaced: another file at the path */
+  s = open_store();
+  char moved[1100];
+  snprintf(moved, sizeof moved, "%s.moved", path);
+  ASSERT_EQ_INT(rename(path, moved), 0);
+  store *t = open_store();
+  store_close(t);
+  ASSERT_EQ_INT(submit_one(s, "eeeeeeeeeeeeeeeeeeeeeeeeeeeeeee8", 2),
+                STORE_ERROR);
+  ASSERT_TRUE(strstr(store_error(s), "replaced") != NULL);
+  store_close(s);
+  unlink(moved);
+
+  /* directories made when missing */
+  char deep[1200], cmd[1300];
+  snprintf(deep, sizeof deep, "sqlite:%s.d/a/b/store.sqlite", path);
+  store *r = NULL;
+  char why[512];
+  ASSERT_EQ_INT(store_open(deep, &r, why, sizeof why), 0);
+  store_close(r);
+  snprintf(cmd, sizeof cmd, "rm -rf '%s.d'", path);
+  ASSERT_EQ_INT(system(cmd), 0);
 
   /* neither a store URI nor a reachable database */
   ASSERT_EQ_INT(store_open("mysql://x", &r, why, sizeof why), STORE_ERROR);
@@ -337,12 +478,52 @@ static void test_sqlite_faults(const char *path) {
   printf("unreachable: %s\n", why);
 }
 
-static void drop_pg_tables(void) {
-  PGconn *c = PQconnectdb(uri);
-  if (PQstatus(c) == CONNECTION_OK)
-    PQclear(PQexec(c, "DROP TABLE IF EXISTS stickslip_chunks, "
-                      "stickslip_jobs, stickslip_meta"));
+/* PostgreSQL: a database of this test's own in the cluster at @a base
+ * (created, or dropped when @a create is 0), so that other tests on the
+ * same cluster (the fixture pg) keep their tables; its URI into uri_buf.
+ * 0, or 1 with the reason printed. */
+static int pg_database(const char *base, int create) {
+  char name[64], sql[128];
+  snprintf(name, sizeof name, "ss_store_test_%ld", (long)getpid());
+  PGconn *c = PQconnectdb(base);
+  snprintf(sql, sizeof sql,
+           create ? "CREATE DATABASE %s" : "DROP DATABASE %s WITH (FORCE)",
+           name);
+  PGresult *r = PQstatus(c) == CONNECTION_OK ? PQexec(c, sql) : NULL;
+  int rc = PQresultStatus(r) == PGRES_COMMAND_OK ? 0 : 1;
+  if (rc)
+    fprintf(stderr, "%s: %s", sql, PQerrorMessage(c));
+  PQclear(r);
   PQfinish(c);
+  /* postgresql://user@host:port/DB?params: DB replaced, or added */
+  const char *host = strstr(base, "://"), *q = strchr(base, '?');
+  host = host ? host + 3 : base;
+  const char *slash = strchr(host, '/');
+  size_t head = slash && (!q || slash < q)
+                    ? (size_t)(slash - base)
+                    : (size_t)((q ? q : base + strlen(base)) - base);
+  snprintf(uri_buf, sizeof uri_buf, "%.*s/%s%s", (int)head, base, name,
+           q ? q : "");
+  return rc;
+}
+
+/* PostgreSQL: a connection broken under the store (its backend ended, as
+ * by a server restart) fails the call that finds it, and the next call
+ * connects again. */
+static void test_pg_broken(store *s) {
+  store_job g;
+  ASSERT_EQ_INT(store_get(s, RACE_ID, &g), 0);
+  PGconn *c = PQconnectdb(uri);
+  PGresult *r = PQexec(c, "SELECT pg_terminate_backend(pid) FROM "
+                          "pg_stat_activity WHERE datname = current_database() "
+                          "AND pid <> pg_backend_pid()");
+  ASSERT_TRUE(PQresultStatus(r) == PGRES_TUPLES_OK && PQntuples(r) >= 1);
+  PQclear(r);
+  PQfinish(c);
+  /* EVIDENCE: issue 30 §3, an unreachable store fails new jobs */
+  ASSERT_EQ_INT(store_get(s, RACE_ID, &g), STORE_ERROR);
+  printf("broken: %s\n", store_error(s));
+  ASSERT_EQ_INT(store_get(s, RACE_ID, &g), 0);
 }
 
 int main(int argc, char **argv) {
@@ -369,10 +550,14 @@ int main(int argc, char **argv) {
     uri = uri_buf;
   }
   int lite = !strncmp(uri, "sqlite:", 7);
+  char base[sizeof uri_buf];
+  snprintf(base, sizeof base, "%s", uri);
   if (lite)
     unlink(uri + 7);
+  else if (pg_database(base, 1))
+    return 1;
   else
-    drop_pg_tables();
+    uri = uri_buf;
   srand(7);
   store *s = open_store();
   printf("store: %s\n", store_kind(s));
@@ -380,8 +565,12 @@ int main(int argc, char **argv) {
   test_claims(s);
   test_fail_dismiss(s);
   test_race(s);
+  if (!lite)
+    test_pg_broken(s);
   store_close(s);
   if (lite)
     test_sqlite_faults(uri + 7);
+  else
+    ASSERT_EQ_INT(pg_database(base, 0), 0);
   TEST_DONE();
 }
