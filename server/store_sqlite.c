@@ -40,10 +40,13 @@ typedef struct lite {
   int ro; /* opened read-only */
 } lite;
 
-#define SCHEMA_VERSION "1"
+#define SCHEMA_VERSION "2"
 
 /* The jobs' n orders them (newest first in a list, oldest first for
- * claims); a chunk's result is stored compressed when packed is 1. */
+ * claims); a chunk's result is stored compressed when packed is 1.  A
+ * job's body has a table of its own: SQLite writes a row whole, and the
+ * job's row is written at every chunk stored (its counts), which would
+ * copy a body of megabytes each time. */
 static const char SCHEMA[] =
     "CREATE TABLE IF NOT EXISTS meta(key TEXT PRIMARY KEY, value TEXT);"
     "CREATE TABLE IF NOT EXISTS jobs("
@@ -53,9 +56,12 @@ static const char SCHEMA[] =
     " updated REAL NOT NULL, finished REAL NOT NULL DEFAULT 0,"
     " chunks INTEGER NOT NULL, chunks_done INTEGER NOT NULL DEFAULT 0,"
     " items INTEGER NOT NULL, items_done INTEGER NOT NULL DEFAULT 0,"
-    " message TEXT NOT NULL DEFAULT '', body BLOB,"
+    " message TEXT NOT NULL DEFAULT '',"
     " problem_status INTEGER NOT NULL DEFAULT 0, problem BLOB);"
     "CREATE INDEX IF NOT EXISTS jobs_active ON jobs(status, n);"
+    "CREATE TABLE IF NOT EXISTS bodies("
+    " job INTEGER PRIMARY KEY REFERENCES jobs(n) ON DELETE CASCADE,"
+    " body BLOB NOT NULL);"
     "CREATE TABLE IF NOT EXISTS chunks("
     " job INTEGER NOT NULL REFERENCES jobs(n) ON DELETE CASCADE,"
     " k INTEGER NOT NULL, stage INTEGER NOT NULL, items INTEGER NOT NULL,"
@@ -248,8 +254,8 @@ static int lite_submit(void *b, const store_job *j, const char *body,
   int rc = begin(l);
   sqlite3_stmt *st = rc ? NULL
                         : prep(l, "INSERT INTO jobs(id, path, status, "
-                                  "created, updated, chunks, items, body) "
-                                  "VALUES(?, ?, 0, ?, ?, ?, ?, ?)");
+                                  "created, updated, chunks, items) "
+                                  "VALUES(?, ?, 0, ?, ?, ?, ?)");
   if (!rc && st) {
     sqlite3_bind_text(st, 1, j->id, -1, SQLITE_STATIC);
     sqlite3_bind_text(st, 2, j->path, -1, SQLITE_STATIC);
@@ -257,12 +263,19 @@ static int lite_submit(void *b, const store_job *j, const char *body,
     sqlite3_bind_double(st, 4, j->created);
     sqlite3_bind_int64(st, 5, (sqlite3_int64)n);
     sqlite3_bind_int64(st, 6, items);
-    sqlite3_bind_blob64(st, 7, body, len, SQLITE_STATIC);
     rc = run(l, st);
   } else if (!rc) {
     rc = STORE_ERROR;
   }
   sqlite3_int64 job = sqlite3_last_insert_rowid(l->db);
+  st = rc ? NULL : prep(l, "INSERT INTO bodies(job, body) VALUES(?, ?)");
+  if (!rc && !st) {
+    rc = STORE_ERROR;
+  } else if (!rc) {
+    sqlite3_bind_int64(st, 1, job);
+    sqlite3_bind_blob64(st, 2, body ? body : "", len, SQLITE_STATIC);
+    rc = run(l, st);
+  }
   st = rc ? NULL
           : prep(l, "INSERT INTO chunks(job, k, stage, items) "
                     "VALUES(?, ?, ?, ?)");
@@ -357,7 +370,8 @@ static int lite_body(void *b, const char *id, char **body, size_t *len) {
   lite *l = b;
   if (enter(l, 0))
     return STORE_ERROR;
-  sqlite3_stmt *st = prep(l, "SELECT body FROM jobs WHERE id = ?");
+  sqlite3_stmt *st = prep(l, "SELECT b.body FROM bodies b JOIN jobs j ON "
+                             "j.n = b.job WHERE j.id = ?");
   int rc = STORE_ERROR;
   if (st) {
     sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
@@ -650,7 +664,7 @@ static int lite_dismiss(void *b, const char *id, double now) {
   int rc = begin(l);
   sqlite3_stmt *st =
       rc ? NULL
-         : prep(l, "UPDATE jobs SET status = 4, body = NULL, problem = NULL, "
+         : prep(l, "UPDATE jobs SET status = 4, problem = NULL, "
                    "updated = ?2, finished = CASE WHEN finished = 0 THEN ?2 "
                    "ELSE finished END WHERE id = ?1 AND status != 4");
   if (!rc && !st)
@@ -662,9 +676,12 @@ static int lite_dismiss(void *b, const char *id, double now) {
     if (!rc && sqlite3_changes(l->db) == 0)
       rc = STORE_NONE;
   }
-  if (!rc) {
-    st = prep(l, "DELETE FROM chunks WHERE job = "
-                 "(SELECT n FROM jobs WHERE id = ?)");
+  const char *const drop[] = {"DELETE FROM chunks WHERE job = "
+                              "(SELECT n FROM jobs WHERE id = ?)",
+                              "DELETE FROM bodies WHERE job = "
+                              "(SELECT n FROM jobs WHERE id = ?)"};
+  for (int i = 0; !rc && i < 2; i++) {
+    st = prep(l, drop[i]);
     if (!st) {
       rc = STORE_ERROR;
     } else {
