@@ -153,15 +153,15 @@ def main():
                     p.wait()
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
-    out = ["| work | replicas | synchronous (s) | job (s) | job / sync | "
-           "answer |", "| --- | ---: | ---: | ---: | ---: | --- |"]
+    out = ["| work | replicas | synchronous (s) | job (s) | job / sync, or "
+           "rate | answer |", "| --- | ---: | ---: | ---: | ---: | --- |"]
     for work, rep, s, j, same in rows:
         ratio = "%.3f" % (j / s) if s else ""
+        if "items" in work:
+            ratio = "%.0f items/s" % (a.items / j)
         out.append("| %s | %d | %s | %.2f | %s | %s |" % (
             work, rep, "%.2f" % s if s else "", j, ratio,
             "same" if same else "DIFFERS"))
-        if "items" in work:
-            out[-1] += " %.0f items/s" % (a.items / j)
     text = "\n".join(out) + "\n"
     print(text)
     if a.results:
