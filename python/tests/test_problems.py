@@ -3,8 +3,13 @@ of its body; the classes cover the daemon's whole table of types."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
+import resource
+import signal
+import threading
+import time
 from typing import Any, Callable, Dict, Tuple, Type
 
 import pytest
@@ -12,12 +17,15 @@ import pytest
 import stickslip
 from stickslip.errors import _BY_TYPE, problem
 from conftest import PAPER, Daemon
+from fake import FakeServer
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(
     os.path.abspath(__file__))))
 
 CASES: Dict[str, Tuple[Type[stickslip.ProblemError], int,
                        Callable[[stickslip.Client], Any], Any]] = {
+    "bad-request": (stickslip.errors.BadFraming, 400,
+                    lambda c: c.request("GET", "/jobs/not-an-id"), None),
     "invalid-json": (stickslip.InvalidJSON, 400,
                      lambda c: c.request("POST", "/orbit", b'{"params":'),
                      None),
@@ -113,3 +121,108 @@ def test_store_unavailable(start: Callable[..., Daemon]) -> None:
     assert isinstance(e, stickslip.Unavailable) and e.status == 503
     assert e.kind == "store-unavailable" and e.retry_after is not None
     assert c.orbit(params=PAPER, kind="overshoot")["orbits"]
+
+
+def check_fields(e: stickslip.ProblemError, cls: type, status: int,
+                 kind: str, pointer: Any) -> None:
+    assert type(e) is cls
+    assert e.status == status and e.kind == kind
+    assert e.type == "/problems/" + kind
+    assert e.title and e.detail
+    assert e.pointer == pointer
+    assert e.request_id and re.fullmatch(r"[0-9a-f]{16}", e.request_id)
+
+
+def test_out_of_memory(start: Callable[..., Daemon]) -> None:
+    """A daemon whose address space is capped 1 MiB above what it uses
+    once started: a 100 000-sample motion (some 10 MB of answer) cannot be
+    allocated, and is answered out-of-memory; the daemon serves on."""
+    d = start("--no-jobs", "--workers", "1")
+    with open("/proc/%d/status" % d.proc.pid) as f:
+        m = re.search(r"VmSize:\s*(\d+)", f.read())
+    assert m is not None
+    kib = int(m.group(1))
+    cap = (kib << 10) + (1 << 20)
+    resource.prlimit(d.proc.pid, resource.RLIMIT_AS, (cap, cap))
+    c = d.client(retries=0)
+    with pytest.raises(stickslip.ProblemError) as info:
+        c.simulate(params=PAPER, initial=X0, t_end=10000,
+                   samples={"n": 100000})
+    check_fields(info.value, stickslip.errors.OutOfMemory, 503,
+                 "out-of-memory", "/samples")
+    assert isinstance(info.value, stickslip.Unavailable)
+    assert c.simulate(params=PAPER, initial=X0, t_end=10,
+                      samples={"n": 10})["samples"]
+
+
+# the stick -> slip point of the paper's orbit: a motion from it to
+# t_end 1.5e7 keeps the one worker busy for about a second
+X0 = [1.2739277342427062, 4.3629277342427093, -0.80748713672430694, 1.0]
+
+
+def test_shutting_down(start: Callable[..., Daemon]) -> None:
+    """SIGTERM while a request waits behind the one running: the running
+    one is answered, the waiting one refused shutting-down."""
+    d = start("--no-jobs", "--workers", "1", "--max-events", "100000000",
+              "--max-horizon", "1e8", "--max-seconds", "600",
+              "--drain", "60")
+    got: Dict[str, Any] = {}
+
+    def run(name: str) -> None:
+        try:
+            got[name] = d.client(retries=0).simulate(
+                params=PAPER, initial=X0, t_end=1.5e7, events=False)
+        except stickslip.ProblemError as e:
+            got[name] = e
+
+    ts = [threading.Thread(target=run, args=(n,))
+          for n in ("running", "waiting")]
+    for t in ts:
+        t.start()
+        time.sleep(0.1)
+    os.kill(d.proc.pid, signal.SIGTERM)
+    for t in ts:
+        t.join(60)
+    assert isinstance(got["running"], dict) and got["running"]["final"]
+    e = got["waiting"]
+    assert isinstance(e, stickslip.ProblemError), e
+    check_fields(e, stickslip.errors.ShuttingDown, 503, "shutting-down",
+                 None)
+    assert d.proc.wait(30) == 0
+
+
+# Problems no request can honestly provoke, answered from the fake server
+# with the daemon's own bodies (server/request.c, api/src/problem.c):
+# client-closed-request is written for a client that has gone and so
+# never reads it; internal is a bug of the daemon; and no-convergence
+# comes from iterations (an event's location, a special point of a family)
+# that converge on every input found so far (an /orbit from a guess that
+# does not converge answers 200 with its reason).
+FAKE: Dict[str, Tuple[Type[stickslip.ProblemError], int, str, str,
+                      Any]] = {
+    "client-closed-request": (stickslip.errors.ClientClosedRequest, 499, "Client Closed Request",
+                              "the client went away", None),
+    "internal": (stickslip.errors.InternalError, 500, "Internal Server Error",
+                 "no memory or no randomness for a job", None),
+    "no-convergence": (stickslip.errors.NoConvergence, 422, "Unprocessable Content",
+                       "the special point at 0.61 was not converged",
+                       "/special"),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(FAKE))
+def test_problem_from_fake_server(kind: str) -> None:
+    cls, status, title, detail, pointer = FAKE[kind]
+    body = {"request_id": "0123456789abcdef", "type": "/problems/" + kind,
+            "title": title, "status": status, "detail": detail}
+    if pointer:
+        body["pointer"] = pointer
+    data = json.dumps(body).encode()
+    routes = {("POST", "/continue"): lambda _: (
+        status, {"Content-Type": "application/problem+json"}, data)}
+    with FakeServer(routes) as fake:
+        with pytest.raises(stickslip.ProblemError) as info:
+            stickslip.Client(fake.url).continuation(params=PAPER)
+    check_fields(info.value, cls, status, kind,
+                 pointer)
+    assert info.value.detail == detail and info.value.body == body
