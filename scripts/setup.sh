@@ -27,7 +27,7 @@ if [ "${1:-}" = --test ]; then
   extras+=(python3-matplotlib)
   command -v npm >/dev/null || extras+=(nodejs npm)
   # the Python client's tests and notebooks (python/, notebooks/)
-  extras+=(python3-pytest mypy python3-numpy python3-pandas python3-matplotlib
+  extras+=(python3-pytest python3-tqdm mypy python3-numpy python3-pandas python3-matplotlib
     python3-ipykernel jupyter-nbconvert python3-venv python3-setuptools python3-pip)
 fi
 cd "$(dirname "$0")/.."
