@@ -36,6 +36,20 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
+/* The job store's directory, removed at exit with its files. */
+static char store_dir[] = "/tmp/stickslip-fuzz-XXXXXX";
+
+static void remove_store(void) {
+  static const char *const files[] = {"jobs.sqlite", "jobs.sqlite-wal",
+                                      "jobs.sqlite-shm", "jobs.sqlite-journal"};
+  char path[128];
+  for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
+    snprintf(path, sizeof path, "%s/%s", store_dir, files[i]);
+    unlink(path);
+  }
+  rmdir(store_dir);
+}
+
 static struct srv_daemon *daemon_once(void) {
   static struct srv_daemon *d;
   if (d)
@@ -66,6 +80,19 @@ static struct srv_daemon *daemon_once(void) {
   cfg.quiet = 1;
   cfg.memory_mb = 64;
   cfg.stream_above = 4096; /* so that small answers stream too */
+  /* jobs on a store of its own, so that Prefer: respond-async and the
+   * /jobs resources are fuzzed too (one worker, a second of compute) */
+  if (!mkdtemp(store_dir))
+    abort();
+  atexit(remove_store);
+  snprintf(cfg.job_store, sizeof cfg.job_store, "sqlite:%s/jobs.sqlite",
+           store_dir);
+  cfg.job_workers = 1;
+  cfg.job_max_seconds = 1;
+  cfg.job_ttl = 3600;
+  cfg.job_lease = 30;
+  cfg.max_job_body = 64 * 1024;
+  cfg.max_job_items = 64;
   ss_gsl_quiet();
   signal(SIGPIPE, SIG_IGN);
   if (!(d = srv_start(&cfg)))
