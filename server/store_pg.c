@@ -323,17 +323,24 @@ static int read_blob(PGresult *r, char **buf, size_t *len, int *extra) {
   return 0;
 }
 
+/* The blob a query of one row gives (read_blob; @a sql run with the text
+ * parameters @a v, binary results), in a call of its own: the store left. */
+static int read_one(pgs *p, const char *what, const char *sql, int n,
+                    const char *const *v, char **buf, size_t *len, int *extra) {
+  PGresult *r = q(p, what, sql, n, v, NULL, NULL, 1);
+  int rc = r ? read_blob(r, buf, len, extra) : STORE_ERROR;
+  PQclear(r);
+  leave(p);
+  return rc;
+}
+
 static int pg_body(void *b, const char *id, char **body, size_t *len) {
   pgs *p = b;
   enter(p);
   const char *v[] = {id};
-  PGresult *r =
-      q(p, "read a body", "SELECT body FROM stickslip_jobs WHERE id = $1", 1, v,
-        NULL, NULL, 1);
-  int rc = r ? read_blob(r, body, len, NULL) : STORE_ERROR;
-  PQclear(r);
-  leave(p);
-  return rc;
+  return read_one(p, "read a body",
+                  "SELECT body FROM stickslip_jobs WHERE id = $1", 1, v, body,
+                  len, NULL);
 }
 
 static int pg_list(void *b, long offset, size_t max, store_job *out, size_t *n,
@@ -539,15 +546,11 @@ static int pg_result(void *b, const char *id, long chunk, char **buf,
   enter(p);
   num k = lng(chunk);
   const char *v[] = {id, k.s};
-  PGresult *r = q(p, "read a result",
+  return read_one(p, "read a result",
                   "SELECT result, packed FROM stickslip_chunks WHERE job = "
                   "(SELECT n FROM stickslip_jobs WHERE id = $1) AND k = $2 "
                   "AND done = 1",
-                  2, v, NULL, NULL, 1);
-  int rc = r ? read_blob(r, buf, len, packed) : STORE_ERROR;
-  PQclear(r);
-  leave(p);
-  return rc;
+                  2, v, buf, len, packed);
 }
 
 static int pg_problem(void *b, const char *id, int *status, char **body,
@@ -555,14 +558,10 @@ static int pg_problem(void *b, const char *id, int *status, char **body,
   pgs *p = b;
   enter(p);
   const char *v[] = {id};
-  PGresult *r = q(p, "read a problem",
+  return read_one(p, "read a problem",
                   "SELECT problem, problem_status FROM stickslip_jobs "
                   "WHERE id = $1 AND status = 3",
-                  1, v, NULL, NULL, 1);
-  int rc = r ? read_blob(r, body, len, status) : STORE_ERROR;
-  PQclear(r);
-  leave(p);
-  return rc;
+                  1, v, body, len, status);
 }
 
 static int pg_dismiss(void *b, const char *id, double now) {

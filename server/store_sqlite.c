@@ -20,6 +20,7 @@
  * "sqlite:PATH?mode=ro".
  */
 #include <errno.h>
+#include <stdarg.h>
 #include <pthread.h>
 #include <sqlite3.h>
 #include <stdio.h>
@@ -150,6 +151,56 @@ static int run(lite *l, sqlite3_stmt *st) {
   return rc == SQLITE_DONE ? 0 : fail_db(l, "write");
 }
 
+/* @a sql prepared, its parameters bound in order from the arguments, a
+ * letter of @a types for each: 't' a string, 'i' an int, 'l' a long, 'd' a
+ * double, 'b' a blob (a pointer, NULL for an empty one, then its size_t
+ * length).  The arguments must outlive the statement (SQLITE_STATIC).
+ * NULL when it cannot be prepared. */
+static sqlite3_stmt *query(lite *l, const char *sql, const char *types, ...) {
+  sqlite3_stmt *st = prep(l, sql);
+  va_list ap;
+  va_start(ap, types);
+  for (int i = 1; st && types[i - 1]; i++) {
+    switch (types[i - 1]) {
+    case 't':
+      sqlite3_bind_text(st, i, va_arg(ap, const char *), -1, SQLITE_STATIC);
+      break;
+    case 'i':
+      sqlite3_bind_int(st, i, va_arg(ap, int));
+      break;
+    case 'l':
+      sqlite3_bind_int64(st, i, va_arg(ap, long));
+      break;
+    case 'd':
+      sqlite3_bind_double(st, i, va_arg(ap, double));
+      break;
+    default: { /* 'b' */
+      const void *p = va_arg(ap, const void *);
+      size_t n = va_arg(ap, size_t);
+      sqlite3_bind_blob64(st, i, p ? p : "", n, SQLITE_STATIC);
+    }
+    }
+  }
+  va_end(ap);
+  return st;
+}
+
+/* Run @a st (from query) to its end: 0, STORE_ERROR, or STORE_NONE when
+ * @a must_change and it changed no row. */
+static int change(lite *l, int must_change, sqlite3_stmt *st) {
+  int rc = st ? run(l, st) : STORE_ERROR;
+  return !rc && must_change && sqlite3_changes(l->db) == 0 ? STORE_NONE : rc;
+}
+
+/* The end of a write call: its transaction committed when @a rc is 0 and
+ * rolled back otherwise, and the store left.  @a rc, or STORE_ERROR when
+ * the commit fails. */
+static int end_write(lite *l, int rc) {
+  rc = rc ? rollback(l, rc) : commit(l);
+  leave(l);
+  return rc;
+}
+
 static void lite_close(void *b) {
   lite *l = b;
   if (!l)
@@ -252,33 +303,21 @@ static int lite_submit(void *b, const store_job *j, const char *body,
   if (enter(l, 1))
     return STORE_ERROR;
   int rc = begin(l);
+  if (!rc)
+    rc = change(l, 0,
+                query(l,
+                      "INSERT INTO jobs(id, path, status, created, updated, "
+                      "chunks, items) VALUES(?, ?, 0, ?, ?, ?, ?)",
+                      "ttddll", j->id, j->path, j->created, j->created, (long)n,
+                      items));
+  long job = (long)sqlite3_last_insert_rowid(l->db);
+  if (!rc)
+    rc = change(l, 0,
+                query(l, "INSERT INTO bodies(job, body) VALUES(?, ?)", "lb",
+                      job, (const void *)body, len));
   sqlite3_stmt *st = rc ? NULL
-                        : prep(l, "INSERT INTO jobs(id, path, status, "
-                                  "created, updated, chunks, items) "
-                                  "VALUES(?, ?, 0, ?, ?, ?, ?)");
-  if (!rc && st) {
-    sqlite3_bind_text(st, 1, j->id, -1, SQLITE_STATIC);
-    sqlite3_bind_text(st, 2, j->path, -1, SQLITE_STATIC);
-    sqlite3_bind_double(st, 3, j->created);
-    sqlite3_bind_double(st, 4, j->created);
-    sqlite3_bind_int64(st, 5, (sqlite3_int64)n);
-    sqlite3_bind_int64(st, 6, items);
-    rc = run(l, st);
-  } else if (!rc) {
-    rc = STORE_ERROR;
-  }
-  sqlite3_int64 job = sqlite3_last_insert_rowid(l->db);
-  st = rc ? NULL : prep(l, "INSERT INTO bodies(job, body) VALUES(?, ?)");
-  if (!rc && !st) {
-    rc = STORE_ERROR;
-  } else if (!rc) {
-    sqlite3_bind_int64(st, 1, job);
-    sqlite3_bind_blob64(st, 2, body ? body : "", len, SQLITE_STATIC);
-    rc = run(l, st);
-  }
-  st = rc ? NULL
-          : prep(l, "INSERT INTO chunks(job, k, stage, items) "
-                    "VALUES(?, ?, ?, ?)");
+                        : prep(l, "INSERT INTO chunks(job, k, stage, items) "
+                                  "VALUES(?, ?, ?, ?)");
   if (!rc && !st)
     rc = STORE_ERROR;
   for (size_t k = 0; !rc && k < n; k++) {
@@ -291,9 +330,7 @@ static int lite_submit(void *b, const store_job *j, const char *body,
     sqlite3_reset(st);
   }
   sqlite3_finalize(st);
-  rc = rc ? rollback(l, rc) : commit(l);
-  leave(l);
-  return rc;
+  return end_write(l, rc);
 }
 
 #define JOB_COLUMNS                                                            \
@@ -322,64 +359,62 @@ static int lite_get(void *b, const char *id, store_job *out) {
   lite *l = b;
   if (enter(l, 0))
     return STORE_ERROR;
-  sqlite3_stmt *st = prep(l, "SELECT " JOB_COLUMNS " FROM jobs WHERE id = ?");
-  int rc = st ? STORE_NONE : STORE_ERROR;
-  if (st) {
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    int s = sqlite3_step(st);
-    if (s == SQLITE_ROW) {
-      read_job(st, out);
-      rc = 0;
-    } else if (s != SQLITE_DONE) {
-      rc = fail_db(l, "read a job");
-    }
-  }
+  sqlite3_stmt *st =
+      query(l, "SELECT " JOB_COLUMNS " FROM jobs WHERE id = ?", "t", id);
+  int rc = st ? sqlite3_step(st) : SQLITE_ERROR;
+  if (rc == SQLITE_ROW)
+    read_job(st, out);
+  rc = rc == SQLITE_ROW    ? 0
+       : rc == SQLITE_DONE ? STORE_NONE
+       : st                ? fail_db(l, "read a job")
+                           : STORE_ERROR;
   sqlite3_finalize(st);
   leave(l);
   return rc;
 }
 
-/* The blob of the one row @a st gives, column @a col, into a malloc'd
- * NUL-terminated copy: 0, STORE_NONE (no row, or a NULL blob),
- * STORE_ERROR.  *extra: column col + 1 as an int, when non-NULL. */
-static int read_blob(lite *l, sqlite3_stmt *st, int col, char **buf,
-                     size_t *len, int *extra) {
-  int s = sqlite3_step(st);
-  if (s == SQLITE_DONE)
-    return STORE_NONE;
-  if (s != SQLITE_ROW)
-    return fail_db(l, "read");
-  if (sqlite3_column_type(st, col) == SQLITE_NULL)
-    return STORE_NONE;
-  size_t n = (size_t)sqlite3_column_bytes(st, col);
-  const void *p = sqlite3_column_blob(st, col);
-  char *out = malloc(n + 1);
-  if (!out)
-    return store__fail("out of memory reading %zu bytes", n);
-  if (n)
-    memcpy(out, p, n);
-  out[n] = 0;
-  *buf = out;
-  *len = n;
-  if (extra)
-    *extra = sqlite3_column_int(st, col + 1);
-  return 0;
+/* The blob of the one row @a st (from query) gives, column 0, into a
+ * malloc'd NUL-terminated copy, in a call of its own: @a st is finalized
+ * and the store left.  0, STORE_NONE (no row, or a NULL blob),
+ * STORE_ERROR.  *extra: column 1 as an int, when non-NULL. */
+static int read_blob(lite *l, sqlite3_stmt *st, char **buf, size_t *len,
+                     int *extra) {
+  int s = st ? sqlite3_step(st) : SQLITE_ERROR, rc = 0;
+  if (s == SQLITE_ROW && sqlite3_column_type(st, 0) != SQLITE_NULL) {
+    size_t n = (size_t)sqlite3_column_bytes(st, 0);
+    const void *p = sqlite3_column_blob(st, 0);
+    char *out = malloc(n + 1);
+    if (out) {
+      if (n)
+        memcpy(out, p, n);
+      out[n] = 0;
+      *buf = out;
+      *len = n;
+      if (extra)
+        *extra = sqlite3_column_int(st, 1);
+    } else {
+      rc = store__fail("out of memory reading %zu bytes", n);
+    }
+  } else {
+    rc = s == SQLITE_ROW || s == SQLITE_DONE ? STORE_NONE
+         : st                                ? fail_db(l, "read")
+                                             : STORE_ERROR;
+  }
+  sqlite3_finalize(st);
+  leave(l);
+  return rc;
 }
 
 static int lite_body(void *b, const char *id, char **body, size_t *len) {
   lite *l = b;
   if (enter(l, 0))
     return STORE_ERROR;
-  sqlite3_stmt *st = prep(l, "SELECT b.body FROM bodies b JOIN jobs j ON "
-                             "j.n = b.job WHERE j.id = ?");
-  int rc = STORE_ERROR;
-  if (st) {
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    rc = read_blob(l, st, 0, body, len, NULL);
-  }
-  sqlite3_finalize(st);
-  leave(l);
-  return rc;
+  return read_blob(l,
+                   query(l,
+                         "SELECT b.body FROM bodies b JOIN jobs j ON "
+                         "j.n = b.job WHERE j.id = ?",
+                         "t", id),
+                   body, len, NULL);
 }
 
 static int lite_list(void *b, long offset, size_t max, store_job *out,
@@ -427,14 +462,14 @@ static int lite_list(void *b, long offset, size_t max, store_job *out,
 static int pick_chunk(lite *l, sqlite3_int64 job, double now,
                       sqlite3_int64 *k) {
   sqlite3_stmt *st =
-      prep(l, "SELECT k FROM chunks INDEXED BY chunks_open WHERE job = ?1 AND "
-              "done = 0 AND stage = (SELECT min(stage) FROM chunks INDEXED BY "
-              "chunks_open WHERE job = ?1 AND done = 0) "
-              "AND (owner IS NULL OR lease < ?2) ORDER BY stage, k LIMIT 1");
+      query(l,
+            "SELECT k FROM chunks INDEXED BY chunks_open WHERE job = ?1 AND "
+            "done = 0 AND stage = (SELECT min(stage) FROM chunks INDEXED BY "
+            "chunks_open WHERE job = ?1 AND done = 0) "
+            "AND (owner IS NULL OR lease < ?2) ORDER BY stage, k LIMIT 1",
+            "ld", (long)job, now);
   if (!st)
     return STORE_ERROR;
-  sqlite3_bind_int64(st, 1, job);
-  sqlite3_bind_double(st, 2, now);
   int s = sqlite3_step(st), rc = 0;
   if (s == SQLITE_ROW)
     *k = sqlite3_column_int64(st, 0);
@@ -470,25 +505,19 @@ static int pick(lite *l, double now, sqlite3_int64 *job,
  * from @a now if it was accepted. */
 static int lease_chunk(lite *l, sqlite3_int64 job, sqlite3_int64 k,
                        const char *owner, double now, double until) {
-  sqlite3_stmt *st = prep(l, "UPDATE chunks SET owner = ?, lease = ? "
-                             "WHERE job = ? AND k = ?");
-  if (!st)
-    return STORE_ERROR;
-  sqlite3_bind_text(st, 1, owner, -1, SQLITE_STATIC);
-  sqlite3_bind_double(st, 2, until);
-  sqlite3_bind_int64(st, 3, job);
-  sqlite3_bind_int64(st, 4, k);
-  int rc = run(l, st);
-  if (rc)
-    return rc;
-  st = prep(l, "UPDATE jobs SET status = 1, updated = ?1, started = "
-               "CASE WHEN started = 0 THEN ?1 ELSE started END "
-               "WHERE n = ?2 AND status = 0");
-  if (!st)
-    return STORE_ERROR;
-  sqlite3_bind_double(st, 1, now);
-  sqlite3_bind_int64(st, 2, job);
-  return run(l, st);
+  int rc = change(l, 0,
+                  query(l,
+                        "UPDATE chunks SET owner = ?, lease = ? "
+                        "WHERE job = ? AND k = ?",
+                        "tdll", owner, until, (long)job, (long)k));
+  if (!rc)
+    rc = change(l, 0,
+                query(l,
+                      "UPDATE jobs SET status = 1, updated = ?1, started = "
+                      "CASE WHEN started = 0 THEN ?1 ELSE started END "
+                      "WHERE n = ?2 AND status = 0",
+                      "dl", now, (long)job));
+  return rc;
 }
 
 /* The pick and the lease in one write transaction (BEGIN IMMEDIATE), so
@@ -507,9 +536,7 @@ static int lite_claim(void *b, const char *owner, double now, double lease,
     rc = lease_chunk(l, job, k, owner, now, now + lease);
   if (!rc)
     *chunk = (long)k;
-  rc = rc ? rollback(l, rc) : commit(l);
-  leave(l);
-  return rc;
+  return end_write(l, rc);
 }
 
 /* The chunk (job id, k) held by owner, not stored, of a job accepted or
@@ -523,17 +550,9 @@ static int lite_renew(void *b, const char *owner, const char *id, long chunk,
   lite *l = b;
   if (enter(l, 1))
     return STORE_ERROR;
-  sqlite3_stmt *st = prep(l, "UPDATE chunks SET lease = ?4 WHERE " HELD);
-  int rc = STORE_ERROR;
-  if (st) {
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    sqlite3_bind_int64(st, 2, chunk);
-    sqlite3_bind_text(st, 3, owner, -1, SQLITE_STATIC);
-    sqlite3_bind_double(st, 4, until);
-    rc = run(l, st);
-    if (!rc && sqlite3_changes(l->db) == 0)
-      rc = STORE_NONE;
-  }
+  int rc = change(l, 1,
+                  query(l, "UPDATE chunks SET lease = ?4 WHERE " HELD, "tltd",
+                        id, chunk, owner, until));
   leave(l);
   return rc;
 }
@@ -545,41 +564,23 @@ static int lite_complete(void *b, const char *owner, const char *id, long chunk,
   if (enter(l, 1))
     return STORE_ERROR;
   int rc = begin(l);
-  sqlite3_stmt *st =
-      rc ? NULL
-         : prep(l, "UPDATE chunks SET done = 1, owner = NULL, lease = NULL, "
-                   "packed = ?4, result = ?5 WHERE " HELD);
-  if (!rc && !st)
-    rc = STORE_ERROR;
-  if (!rc) {
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    sqlite3_bind_int64(st, 2, chunk);
-    sqlite3_bind_text(st, 3, owner, -1, SQLITE_STATIC);
-    sqlite3_bind_int(st, 4, packed);
-    sqlite3_bind_blob64(st, 5, result ? result : "", len, SQLITE_STATIC);
-    rc = run(l, st);
-    if (!rc && sqlite3_changes(l->db) == 0)
-      rc = STORE_NONE;
-  }
-  if (!rc) {
-    st = prep(l, "UPDATE jobs SET chunks_done = chunks_done + 1, "
-                 "items_done = items_done + (SELECT items FROM chunks "
-                 "WHERE job = jobs.n AND k = ?2), updated = ?3, "
-                 "status = CASE WHEN chunks_done + 1 = chunks THEN 2 "
-                 "ELSE status END, finished = CASE WHEN chunks_done + 1 = "
-                 "chunks THEN ?3 ELSE finished END WHERE id = ?1");
-    if (!st) {
-      rc = STORE_ERROR;
-    } else {
-      sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-      sqlite3_bind_int64(st, 2, chunk);
-      sqlite3_bind_double(st, 3, now);
-      rc = run(l, st);
-    }
-  }
-  rc = rc ? rollback(l, rc) : commit(l);
-  leave(l);
-  return rc;
+  if (!rc)
+    rc = change(l, 1,
+                query(l,
+                      "UPDATE chunks SET done = 1, owner = NULL, lease = "
+                      "NULL, packed = ?4, result = ?5 WHERE " HELD,
+                      "tltib", id, chunk, owner, packed, result, len));
+  if (!rc)
+    rc = change(l, 0,
+                query(l,
+                      "UPDATE jobs SET chunks_done = chunks_done + 1, "
+                      "items_done = items_done + (SELECT items FROM chunks "
+                      "WHERE job = jobs.n AND k = ?2), updated = ?3, "
+                      "status = CASE WHEN chunks_done + 1 = chunks THEN 2 "
+                      "ELSE status END, finished = CASE WHEN chunks_done + "
+                      "1 = chunks THEN ?3 ELSE finished END WHERE id = ?1",
+                      "tld", id, chunk, now));
+  return end_write(l, rc);
 }
 
 static int lite_fail(void *b, const char *id, const char *message, int status,
@@ -588,37 +589,22 @@ static int lite_fail(void *b, const char *id, const char *message, int status,
   if (enter(l, 1))
     return STORE_ERROR;
   int rc = begin(l);
-  sqlite3_stmt *st =
-      rc ? NULL
-         : prep(l, "UPDATE jobs SET status = 3, message = ?2, "
-                   "problem_status = ?3, problem = ?4, updated = ?5, "
-                   "finished = ?5 WHERE id = ?1 AND status IN (0, 1)");
-  if (!rc && !st)
-    rc = STORE_ERROR;
-  if (!rc) {
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    sqlite3_bind_text(st, 2, message ? message : "", -1, SQLITE_STATIC);
-    sqlite3_bind_int(st, 3, status);
-    sqlite3_bind_blob64(st, 4, problem ? problem : "", len, SQLITE_STATIC);
-    sqlite3_bind_double(st, 5, now);
-    rc = run(l, st);
-    if (!rc && sqlite3_changes(l->db) == 0)
-      rc = STORE_NONE;
-  }
+  if (!rc)
+    rc = change(l, 1,
+                query(l,
+                      "UPDATE jobs SET status = 3, message = ?2, "
+                      "problem_status = ?3, problem = ?4, updated = ?5, "
+                      "finished = ?5 WHERE id = ?1 AND status IN (0, 1)",
+                      "ttibd", id, message ? message : "", status,
+                      (const void *)problem, len, now));
   /* a failed job's answer is its problem: its chunks are of no more use */
-  if (!rc) {
-    st = prep(l, "DELETE FROM chunks WHERE job = "
-                 "(SELECT n FROM jobs WHERE id = ?)");
-    if (!st) {
-      rc = STORE_ERROR;
-    } else {
-      sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-      rc = run(l, st);
-    }
-  }
-  rc = rc ? rollback(l, rc) : commit(l);
-  leave(l);
-  return rc;
+  if (!rc)
+    rc = change(l, 0,
+                query(l,
+                      "DELETE FROM chunks WHERE job = "
+                      "(SELECT n FROM jobs WHERE id = ?)",
+                      "t", id));
+  return end_write(l, rc);
 }
 
 static int lite_result(void *b, const char *id, long chunk, char **buf,
@@ -626,18 +612,13 @@ static int lite_result(void *b, const char *id, long chunk, char **buf,
   lite *l = b;
   if (enter(l, 0))
     return STORE_ERROR;
-  sqlite3_stmt *st = prep(l, "SELECT result, packed FROM chunks WHERE job = "
-                             "(SELECT n FROM jobs WHERE id = ?) AND k = ? "
-                             "AND done = 1");
-  int rc = STORE_ERROR;
-  if (st) {
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    sqlite3_bind_int64(st, 2, chunk);
-    rc = read_blob(l, st, 0, buf, len, packed);
-  }
-  sqlite3_finalize(st);
-  leave(l);
-  return rc;
+  return read_blob(l,
+                   query(l,
+                         "SELECT result, packed FROM chunks WHERE job = "
+                         "(SELECT n FROM jobs WHERE id = ?) AND k = ? "
+                         "AND done = 1",
+                         "tl", id, chunk),
+                   buf, len, packed);
 }
 
 static int lite_problem(void *b, const char *id, int *status, char **body,
@@ -645,16 +626,12 @@ static int lite_problem(void *b, const char *id, int *status, char **body,
   lite *l = b;
   if (enter(l, 0))
     return STORE_ERROR;
-  sqlite3_stmt *st = prep(l, "SELECT problem, problem_status FROM jobs "
-                             "WHERE id = ? AND status = 3");
-  int rc = STORE_ERROR;
-  if (st) {
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    rc = read_blob(l, st, 0, body, len, status);
-  }
-  sqlite3_finalize(st);
-  leave(l);
-  return rc;
+  return read_blob(l,
+                   query(l,
+                         "SELECT problem, problem_status FROM jobs "
+                         "WHERE id = ? AND status = 3",
+                         "t", id),
+                   body, len, status);
 }
 
 static int lite_dismiss(void *b, const char *id, double now) {
@@ -662,36 +639,21 @@ static int lite_dismiss(void *b, const char *id, double now) {
   if (enter(l, 1))
     return STORE_ERROR;
   int rc = begin(l);
-  sqlite3_stmt *st =
-      rc ? NULL
-         : prep(l, "UPDATE jobs SET status = 4, problem = NULL, "
-                   "updated = ?2, finished = CASE WHEN finished = 0 THEN ?2 "
-                   "ELSE finished END WHERE id = ?1 AND status != 4");
-  if (!rc && !st)
-    rc = STORE_ERROR;
-  if (!rc) {
-    sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-    sqlite3_bind_double(st, 2, now);
-    rc = run(l, st);
-    if (!rc && sqlite3_changes(l->db) == 0)
-      rc = STORE_NONE;
-  }
+  if (!rc)
+    rc = change(l, 1,
+                query(l,
+                      "UPDATE jobs SET status = 4, problem = NULL, "
+                      "updated = ?2, finished = CASE WHEN finished = 0 "
+                      "THEN ?2 ELSE finished END WHERE id = ?1 AND "
+                      "status != 4",
+                      "td", id, now));
   const char *const drop[] = {"DELETE FROM chunks WHERE job = "
                               "(SELECT n FROM jobs WHERE id = ?)",
                               "DELETE FROM bodies WHERE job = "
                               "(SELECT n FROM jobs WHERE id = ?)"};
-  for (int i = 0; !rc && i < 2; i++) {
-    st = prep(l, drop[i]);
-    if (!st) {
-      rc = STORE_ERROR;
-    } else {
-      sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
-      rc = run(l, st);
-    }
-  }
-  rc = rc ? rollback(l, rc) : commit(l);
-  leave(l);
-  return rc;
+  for (int i = 0; !rc && i < 2; i++)
+    rc = change(l, 0, query(l, drop[i], "t", id));
+  return end_write(l, rc);
 }
 
 static int lite_counts(void *b, long by_status[5], long *chunks_pending) {
@@ -734,20 +696,13 @@ static int lite_expire(void *b, double before, long *n) {
     return STORE_ERROR;
   int rc = begin(l);
   /* the chunks go with their job (ON DELETE CASCADE) */
-  sqlite3_stmt *st =
-      rc ? NULL
-         : prep(l, "DELETE FROM jobs WHERE status >= 2 AND finished < ?");
-  if (!rc && !st)
-    rc = STORE_ERROR;
-  if (!rc) {
-    sqlite3_bind_double(st, 1, before);
-    rc = run(l, st);
-    if (!rc)
-      *n = (long)sqlite3_changes(l->db);
-  }
-  rc = rc ? rollback(l, rc) : commit(l);
-  leave(l);
-  return rc;
+  if (!rc)
+    rc = change(l, 0,
+                query(l, "DELETE FROM jobs WHERE status >= 2 AND finished < ?",
+                      "d", before));
+  if (!rc)
+    *n = (long)sqlite3_changes(l->db);
+  return end_write(l, rc);
 }
 
 const store_ops store__sqlite_ops = {
