@@ -295,6 +295,10 @@ void srv__jobs_release(srv__jobs *js, api_job *j);
 void srv__jobs_wait(srv__jobs *js, srv__results *res);
 /* ... no longer: it has completed. */
 void srv__jobs_unwait(srv__jobs *js, srv__results *res);
+/* The connection of results stream @a res, suspended, needs its next
+ * chunk read from the store: the reader thread reads it
+ * (srv__results_fetch), in the order asked. */
+void srv__jobs_fetch(srv__jobs *js, srv__results *res);
 /* The store's counts into the metrics (at most once a second). */
 void srv__jobs_metrics(srv__jobs *js);
 
@@ -307,18 +311,20 @@ int srv__prefers_async(struct MHD_Connection *c);
  * path is no job resource. */
 int srv__jobs_admit(struct srv_daemon *d, struct MHD_Connection *c, srv__req *r,
                     const char *url, const char *method);
-/* The last call of a job resource's request: its answer, or its work in
- * the pool. */
-enum MHD_Result srv__jobs_answer(struct srv_daemon *d, struct MHD_Connection *c,
-                                 srv__req *r);
-/* On a worker: a job resource's work (a submission: the job stored; a
- * results request: the job opened), its answer into r->ar. */
+/* On a worker: a job resource's work, every call of the store among it (a
+ * submission: the job stored; a list, a status, a dismissal: read or
+ * written; a results request: the job opened), its answer into r->ar. */
 void srv__jobs_run(srv__req *r);
 /* Back on the I/O thread: the answer, or the results' stream. */
 enum MHD_Result srv__jobs_resumed(struct srv_daemon *d,
                                   struct MHD_Connection *c, srv__req *r);
 /* The ticker resumes a results stream that waited. */
 void srv__results_resume(srv__results *res);
+/* On the reader thread: the next chunk of @a res read from the store, and
+ * its connection resumed. */
+void srv__results_fetch(srv__results *res);
+/* The stream after @a res in the reader's queue (its link). */
+srv__results **srv__results_next(srv__results *res);
 /* The request of a results stream has completed. */
 void srv__results_detach(srv__results *res);
 

@@ -22,6 +22,10 @@
  * jobs older than --job-ttl (every SWEEP_EVERY).  A DELETE on this replica
  * stops its chunks at once (srv__jobs_cancel).
  *
+ * The reader reads the chunks that results streams send, one at a time in
+ * the order they are asked: the I/O thread never calls the store, which
+ * may be a round trip away or, for a while, not answer at all.
+ *
  * An opened job (api_job_open of its stored body) is kept in a small cache
  * of the CACHE last used, shared by the runners and the results streams,
  * so that the body of a batch of ten thousand chunks is parsed once, not
@@ -85,6 +89,11 @@ struct srv__jobs {
   unsigned long clock;
   srv__results **waiting; /* results streams to resume */
   size_t n_waiting, cap_waiting;
+  /* results streams whose next chunk is to be read, first to last */
+  srv__results *fetch_head, *fetch_tail;
+  pthread_cond_t fetch_cv;
+  pthread_t reader;
+  int reader_started;
   double counts_at;
   char note[1024]; /* what opening the store at the start had to say */
 };
@@ -310,6 +319,46 @@ void srv__jobs_unwait(srv__jobs *js, srv__results *res) {
     if (js->waiting[i] == res)
       js->waiting[i--] = js->waiting[--js->n_waiting];
   pthread_mutex_unlock(&js->mu);
+}
+
+void srv__jobs_fetch(srv__jobs *js, srv__results *res) {
+  if (!js->reader_started) { /* no thread could be made: read here */
+    srv__results_fetch(res);
+    return;
+  }
+  pthread_mutex_lock(&js->mu);
+  *srv__results_next(res) = NULL;
+  if (js->fetch_tail)
+    *srv__results_next(js->fetch_tail) = res;
+  else
+    js->fetch_head = res;
+  js->fetch_tail = res;
+  pthread_cond_signal(&js->fetch_cv);
+  pthread_mutex_unlock(&js->mu);
+}
+
+/* Until the ticker stops, and then until its queue is empty (every stream
+ * asked is answered, if only by its end). */
+static void *reader_main(void *arg) {
+  srv__jobs *js = arg;
+  pthread_mutex_lock(&js->mu);
+  for (;;) {
+    srv__results *res = js->fetch_head;
+    if (!res) {
+      if (js->stop_tk)
+        break;
+      pthread_cond_wait(&js->fetch_cv, &js->mu);
+      continue;
+    }
+    js->fetch_head = *srv__results_next(res);
+    if (!js->fetch_head)
+      js->fetch_tail = NULL;
+    pthread_mutex_unlock(&js->mu);
+    srv__results_fetch(res);
+    pthread_mutex_lock(&js->mu);
+  }
+  pthread_mutex_unlock(&js->mu);
+  return NULL;
 }
 
 /* ---- runners ------------------------------------------------------------- */
@@ -555,6 +604,7 @@ srv__jobs *srv__jobs_start(struct srv_daemon *d) {
   js->d = d;
   pthread_mutex_init(&js->mu, NULL);
   pthread_cond_init(&js->wake, NULL);
+  pthread_cond_init(&js->fetch_cv, NULL);
   char host[64] = "?";
   gethostname(host, sizeof host - 1);
   snprintf(js->owner, sizeof js->owner, "%s:%ld:%.0f", host, (long)getpid(),
@@ -572,6 +622,7 @@ srv__jobs *srv__jobs_start(struct srv_daemon *d) {
         pthread_create(&js->run[i].th, NULL, runner_main, &js->run[i]) == 0;
   }
   js->ticker_started = pthread_create(&js->ticker, NULL, ticker_main, js) == 0;
+  js->reader_started = pthread_create(&js->reader, NULL, reader_main, js) == 0;
   return js;
 }
 
@@ -597,9 +648,12 @@ void srv__jobs_free(srv__jobs *js) {
   srv__jobs_stop(js);
   pthread_mutex_lock(&js->mu);
   js->stop_tk = 1;
+  pthread_cond_signal(&js->fetch_cv);
   pthread_mutex_unlock(&js->mu);
   if (js->ticker_started)
     pthread_join(js->ticker, NULL);
+  if (js->reader_started)
+    pthread_join(js->reader, NULL);
   resume_waiting(js);
   for (int i = 0; i < CACHE; i++)
     api_job_free(js->cache[i].job);
@@ -607,6 +661,7 @@ void srv__jobs_free(srv__jobs *js) {
   free(js->waiting);
   free(js->run);
   pthread_cond_destroy(&js->wake);
+  pthread_cond_destroy(&js->fetch_cv);
   pthread_mutex_destroy(&js->mu);
   free(js);
 }

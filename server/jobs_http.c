@@ -189,92 +189,84 @@ int srv__jobs_admit(struct srv_daemon *d, struct MHD_Connection *c, srv__req *r,
   return 1;
 }
 
-/* ---- the answers made on the I/O thread ---------------------------------- */
+/* ---- the answers, made in the pool ---------------------------------------
+ * Every call of the store is made on a worker, never on the I/O thread: a
+ * PostgreSQL store is a round trip away, and one that stops answering
+ * would stop every connection for as long as its timeouts last. */
 
-static enum MHD_Result send_list(struct srv_daemon *d, struct MHD_Connection *c,
-                                 srv__req *r, store *st) {
-  api_response ar;
+static void list_into(srv__req *r, store *st, api_response *ar) {
   store_job *jobs = calloc((size_t)r->limit, sizeof *jobs);
   api_job_info *info = calloc((size_t)r->limit, sizeof *info);
   size_t n = 0;
   long total = 0;
   int rc = STORE_ERROR;
   if (!jobs || !info)
-    api_problem(&ar, API_P_OUT_OF_MEMORY, "out of memory", NULL, NULL, 0);
+    api_problem(ar, API_P_OUT_OF_MEMORY, "out of memory", NULL, NULL, 0);
   else {
-    SRV__TIMED(d, rc,
+    SRV__TIMED(r->d, rc,
                store_list(st, r->offset, (size_t)r->limit, jobs, &n, &total));
     if (rc != 0)
-      store_problem_of(st, &ar);
+      store_problem_of(st, ar);
   }
   if (rc == 0) {
     for (size_t i = 0; i < n; i++)
       info[i] = info_of(&jobs[i]);
-    api_job_list_json(info, n, r->offset, r->limit, total, &ar);
+    api_job_list_json(info, n, r->offset, r->limit, total, ar);
   }
   free(jobs);
   free(info);
-  return srv__send_api(c, r, &ar, NULL);
 }
 
 /* The job's problem: what its failure stored. */
-static enum MHD_Result send_failure(struct srv_daemon *d,
-                                    struct MHD_Connection *c, srv__req *r,
-                                    store *st) {
-  api_response ar;
-  memset(&ar, 0, sizeof ar);
+static void failure_into(srv__req *r, store *st, api_response *ar) {
+  memset(ar, 0, sizeof *ar);
   int rc;
-  SRV__TIMED(d, rc,
-             store_problem(st, r->job_id, &ar.status, &ar.body, &ar.len));
+  SRV__TIMED(r->d, rc,
+             store_problem(st, r->job_id, &ar->status, &ar->body, &ar->len));
   if (rc != 0) {
-    free(ar.body);
-    store_problem_of(st, &ar);
+    free(ar->body);
+    store_problem_of(st, ar);
   } else {
-    ar.content_type = "application/problem+json";
-    ar.held = ar.len;
+    ar->content_type = "application/problem+json";
+    ar->held = ar->len;
   }
-  return srv__send_api(c, r, &ar, NULL);
 }
 
-enum MHD_Result srv__jobs_answer(struct srv_daemon *d, struct MHD_Connection *c,
-                                 srv__req *r) {
-  api_response ar;
+/* The answer to GET /jobs, GET or DELETE /jobs/{id}, into r->ar; for GET
+ * /jobs/{id}/results of a job that has not failed, 1: its stream is to be
+ * opened. */
+static int answer(srv__req *r, store *st) {
   store_job sj;
   int rc;
-  store *st = srv__jobs_store(d->jobs);
-  if (!st) {
-    store_problem_of(NULL, &ar);
-    return srv__send_api(c, r, &ar, NULL);
+  if (r->jobs == SRV__JOBS_LIST) {
+    list_into(r, st, &r->ar);
+    return 0;
   }
-  if (r->jobs == SRV__JOBS_LIST)
-    return send_list(d, c, r, st);
   if (!strcmp(r->method, "DELETE")) {
-    SRV__TIMED(d, rc, store_dismiss(st, r->job_id, srv__wall()));
+    SRV__TIMED(r->d, rc, store_dismiss(st, r->job_id, srv__wall()));
     if (rc == 0)
-      srv__jobs_cancel(d->jobs, r->job_id);
+      srv__jobs_cancel(r->d->jobs, r->job_id);
   }
-  SRV__TIMED(d, rc, store_get(st, r->job_id, &sj));
+  SRV__TIMED(r->d, rc, store_get(st, r->job_id, &sj));
   if (rc == STORE_ERROR) {
-    store_problem_of(st, &ar);
-    return srv__send_api(c, r, &ar, NULL);
-  }
-  if (rc == STORE_NONE ||
-      (r->jobs == SRV__JOBS_RESULTS && sj.status == STORE_DISMISSED))
-    return srv__send_problem(c, r, API_P_NOT_FOUND,
-                             rc == STORE_NONE
-                                 ? "no such job (or it has expired)"
+    store_problem_of(st, &r->ar);
+  } else if (rc == STORE_NONE ||
+             (r->jobs == SRV__JOBS_RESULTS && sj.status == STORE_DISMISSED)) {
+    api_problem(&r->ar, API_P_NOT_FOUND,
+                rc == STORE_NONE ? "no such job (or it has expired)"
                                  : "the job was dismissed: its results are "
                                    "deleted",
-                             NULL, 0, NULL);
-  if (r->jobs == SRV__JOBS_ONE) {
+                NULL, NULL, 0);
+  } else if (r->jobs == SRV__JOBS_ONE) {
     api_job_info in = info_of(&sj);
-    api_job_status_json(&in, &ar);
-    return srv__send_api(c, r, &ar, NULL);
+    api_job_status_json(&in, &r->ar);
+  } else if (sj.status == STORE_FAILED) {
+    failure_into(r, st, &r->ar);
+  } else {
+    snprintf(r->job_path, sizeof r->job_path, "%s", sj.path);
+    return 1;
   }
-  if (sj.status == STORE_FAILED)
-    return send_failure(d, c, r, st);
-  snprintf(r->job_path, sizeof r->job_path, "%s", sj.path);
-  return srv__submit(d, c, r); /* the job opened in the pool */
+  return 0;
 }
 
 /* ---- the work done in the pool ------------------------------------------- */
@@ -337,8 +329,16 @@ struct srv__results {
   int wait;
   char *buf; /* the chunk being written */
   size_t len, off;
-  int refs; /* the response and the request */
+  int refs; /* the response, the request, the reader's queue */
+  /* what the reader last found (next_chunk's value), or FETCH_NONE when
+   * nothing is asked and FETCH_ASKED while it reads (under mu) */
+  int fetched;
+  srv__results *next; /* in the reader's queue */
 };
+
+enum { FETCH_NONE = -10, FETCH_ASKED = -11 };
+
+srv__results **srv__results_next(srv__results *res) { return &res->next; }
 
 void srv__jobs_run(srv__req *r) {
   store *st = srv__jobs_store(r->d->jobs);
@@ -350,6 +350,8 @@ void srv__jobs_run(srv__req *r) {
     submit_job(r, st);
     return;
   }
+  if (!answer(r, st))
+    return;
   api_job *job = srv__jobs_open(r->d->jobs, r->job_id, r->job_path, &r->ar);
   if (!job) {
     if (!r->ar.status)
@@ -369,6 +371,7 @@ void srv__jobs_run(srv__req *r) {
   res->n = api_job_chunks(job);
   res->wait = r->wait;
   res->refs = 1; /* the request's; the response takes another */
+  res->fetched = FETCH_NONE;
   snprintf(res->id, sizeof res->id, "%s", r->job_id);
   r->res = res;
 }
@@ -436,19 +439,44 @@ static int next_chunk(srv__results *res, store *st) {
   }
 }
 
+void srv__results_fetch(srv__results *res) {
+  struct srv_daemon *d = res->d;
+  store *st = srv__jobs_store(d->jobs);
+  int rc = st && !atomic_load(&d->draining) ? next_chunk(res, st) : -1;
+  pthread_mutex_lock(&res->mu);
+  res->fetched = rc;
+  if (res->c)
+    MHD_resume_connection(res->c);
+  pthread_mutex_unlock(&res->mu);
+  results_release(res); /* the queue's reference */
+}
+
+/* The stream's bytes: what the reader put in res->buf.  When it is spent
+ * the connection is suspended and the reader asked for the next chunk
+ * (resumed when it is read), or, when that chunk is not stored yet, the
+ * ticker asked to resume it to ask again. */
 static ssize_t results_read(void *cls, uint64_t pos, char *buf, size_t max) {
   srv__results *res = cls;
   struct srv_daemon *d = res->d;
   (void)pos;
   while (res->off == res->len) {
-    store *st = srv__jobs_store(d->jobs);
-    int rc = st && !atomic_load(&d->draining) ? next_chunk(res, st) : -1;
-    if (rc < 0)
+    pthread_mutex_lock(&res->mu);
+    int rc = res->fetched;
+    res->fetched = rc == FETCH_NONE ? FETCH_ASKED : FETCH_NONE;
+    if (rc == FETCH_NONE)
+      res->refs++; /* the reader's queue holds it */
+    pthread_mutex_unlock(&res->mu);
+    if (rc == FETCH_NONE) {
+      MHD_suspend_connection(res->c);
+      srv__jobs_fetch(d->jobs, res);
+      return 0;
+    }
+    if (rc < 0 || atomic_load(&d->draining))
       return MHD_CONTENT_READER_END_WITH_ERROR; /* the answer is cut */
     if (rc == 2 || (rc == 0 && !res->wait))
       return MHD_CONTENT_READER_END_OF_STREAM;
     if (rc == 0) {
-      /* the ticker resumes the connection to look again */
+      /* the ticker resumes the connection to ask again */
       MHD_suspend_connection(res->c);
       srv__jobs_wait(d->jobs, res);
       return 0;

@@ -527,8 +527,8 @@ enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
   srv__receiving(d, r->cn, 0);
   if (r->preflight[0])
     return srv__send_body(c, r, 204, NULL, 0, NULL, 0, r->preflight, 0);
-  if (r->jobs)
-    return srv__jobs_answer(d, c, r);
+  if (r->jobs) /* the store is read in the pool (jobs_http.c) */
+    return srv__submit(d, c, r);
   if (!r->is_post) {
     api_response ar;
     if (d->etags[r->ep][0]) {

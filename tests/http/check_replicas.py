@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Two daemons on one PostgreSQL job store, one killed mid-job.
+"""Two daemons on one PostgreSQL job store, one killed mid-job; and a
+store that stops answering.
 
 A /batch job of many chunks is submitted to replica A; both replicas
 claim its chunks (each one's stickslip_job_chunks_total grows), and B
@@ -7,6 +8,12 @@ answers for the job too (its status, its results); then B is killed with
 SIGKILL while it computes.  The job must finish on A alone (B's chunk is
 claimed again once its lease lapses), with every item answered exactly
 once and each item's answer the one the synchronous /batch gives.
+
+Then a daemon reaches the store through a proxy that is frozen (it
+forwards nothing, as a server that hangs): requests for a job's status and
+results wait for the store, and /health must still be answered at once,
+since the store is called on workers and the reader thread, never on the
+I/O thread.  Once the proxy thaws, the waiting requests are answered.
 
 Usage: check_replicas.py STICKSLIPD @URI_FILE   (the CTest fixture pg
 writes URI_FILE; without it the check is skipped, 77)
@@ -16,8 +23,10 @@ import json
 import os
 import re
 import signal
+import socket
 import subprocess
 import sys
+import threading
 import time
 
 PAPER = {"chi": 0.2, "eta": 4, "us": 0.0724, "ur": 0.6178, "V": 1}
@@ -27,10 +36,10 @@ ITEMS = 32 * 24  # 24 chunks of 32 items and the done line
 PROCS = []
 
 
-def start(daemon, uri):
+def start(daemon, uri, lease="1"):
     p = subprocess.Popen(
         [daemon, "--port", "0", "--quiet", "--job-store", uri,
-         "--job-lease", "1", "--job-workers", "1"],
+         "--job-lease", lease, "--job-workers", "1"],
         stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
     PROCS.append(p)
     line = p.stderr.readline()
@@ -41,8 +50,8 @@ def start(daemon, uri):
     return p, int(m.group(1))
 
 
-def call(port, method, path, body=None, headers=None):
-    c = http.client.HTTPConnection("127.0.0.1", port, timeout=120)
+def call(port, method, path, body=None, headers=None, timeout=120):
+    c = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
     h = {"Content-Type": "application/json"}
     h.update(headers or {})
     c.request(method, path, None if body is None else json.dumps(body), h)
@@ -71,6 +80,92 @@ def canonical(lines):
                 sys.exit("item %d answered twice" % o["index"])
             out[o["index"]] = o
     return out, done
+
+
+class Proxy:
+    """A TCP proxy to host:port; while frozen it holds what it reads."""
+
+    def __init__(self, host, port):
+        self.up = (host, port)
+        self.thawed = threading.Event()
+        self.thawed.set()
+        self.ls = socket.socket()
+        self.ls.bind(("127.0.0.1", 0))
+        self.ls.listen(16)
+        self.port = self.ls.getsockname()[1]
+        threading.Thread(target=self.accept, daemon=True).start()
+
+    def accept(self):
+        while True:
+            a, _ = self.ls.accept()
+            b = socket.create_connection(self.up)
+            for src, dst in ((a, b), (b, a)):
+                threading.Thread(target=self.pump, args=(src, dst),
+                                 daemon=True).start()
+
+    def pump(self, src, dst):
+        try:
+            while True:
+                data = src.recv(65536)
+                if not data:
+                    break
+                self.thawed.wait()
+                dst.sendall(data)
+        except OSError:
+            pass
+        for s in (src, dst):
+            try:
+                s.shutdown(socket.SHUT_RDWR)
+            except OSError:
+                pass
+
+
+def check_stalled_store(daemon, uri, check):
+    m = re.match(r"(postgresql://[^@]*@)([^:/]+):(\d+)(/.*)$", uri)
+    proxy = Proxy(m.group(2), int(m.group(3)))
+    # a long lease: no renewal is due while the store hangs
+    c, pc = start(daemon, "%s127.0.0.1:%d%s"
+                  % (m.group(1), proxy.port, m.group(4)), lease="600")
+    body = {"params": PAPER, "initial": [0.1, 0, 0, 1], "t_end": 100}
+    st, hdr, _ = call(pc, "POST", "/simulate", body,
+                      {"Prefer": "respond-async"})
+    loc = hdr.get("Location", "")
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 60:
+        if json.loads(call(pc, "GET", loc)[2])["status"] == "successful":
+            break
+        time.sleep(0.05)
+    check(st == 201, "a job through the proxy (%d)" % st)
+    proxy.thawed.clear()
+    answers = {}
+
+    def ask(what, path):
+        answers[what] = call(pc, "GET", path)[0]
+
+    waiting = [threading.Thread(target=ask, args=(w, p))
+               for w, p in (("status", loc), ("results", loc + "/results"),
+                            ("list", "/jobs"))]
+    for t in waiting:
+        t.start()
+    time.sleep(0.5)
+    worst = 0.0
+    for _ in range(5):
+        t0 = time.monotonic()
+        try:
+            ok = call(pc, "GET", "/health", timeout=3)[0] == 200
+        except OSError:
+            ok = False
+        worst = max(worst, time.monotonic() - t0 if ok else 99)
+        time.sleep(0.1)
+    check(not answers and worst < 1.0,
+          "/health while the store hangs under three job requests: worst "
+          "%.3f s (requests answered meanwhile: %s)" % (worst, answers))
+    proxy.thawed.set()
+    for t in waiting:
+        t.join(60)
+    check(answers == {"status": 200, "results": 200, "list": 200},
+          "the waiting requests answered once the store answers: %s"
+          % answers)
 
 
 def main():
@@ -149,6 +244,7 @@ def main():
               "each item's answer is the synchronous one (first 64)")
         print("chunks: A %d, B %d (before it was killed)"
               % (chunks_done(pa), cb))
+        check_stalled_store(daemon, uri, check)
     finally:
         for p in PROCS:
             if p.poll() is None:
