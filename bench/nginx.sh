@@ -8,9 +8,8 @@
 set -euo pipefail
 bin=$1
 src=$(cd "$(dirname "$0")/.." && pwd)
-nginx_bin=$(command -v nginx || echo /usr/sbin/nginx)
 tmp=$(mktemp -d)
-trap 'kill $(jobs -p) 2>/dev/null; [ -f "$tmp/nginx.pid" ] && kill "$(cat "$tmp/nginx.pid")" 2>/dev/null; rm -rf "$tmp"' EXIT
+trap 'kill $(jobs -p) 2>/dev/null; nginx_stop "$tmp/nginx"; rm -rf "$tmp"' EXIT
 start_daemons() { # n -> ports in $ports
   ports=()
   for i in $(seq "$1"); do
@@ -21,19 +20,20 @@ start_daemons() { # n -> ports in $ports
   done
 }
 stop_all() {
-  [ -f "$tmp/nginx.pid" ] && kill "$(cat "$tmp/nginx.pid")" 2>/dev/null && rm -f "$tmp/nginx.pid"
+  nginx_stop "$tmp/nginx"
   pkill -f "$bin --port 0 --quiet --trusted-proxy 127.0.0.1" 2>/dev/null || true
   sleep 0.3
 }
+# docker/nginx.conf as tests/nginx runs it, without its per-address limits:
+# the clients here are 8 threads on one address, far over 100 requests a
+# second
+# shellcheck source=tests/nginx/loopback.sh
+. "$src/tests/nginx/loopback.sh"
 start_nginx() { # listen port in $listen
-  listen=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
-  servers=""
-  for p in "${ports[@]}"; do servers+="server 127.0.0.1:$p max_fails=1 fail_timeout=5s; "; done
-  mkdir -p "$tmp/body" "$tmp/proxy" "$tmp/fastcgi" "$tmp/uwsgi" "$tmp/scgi"
-  sed -e "s|@PREFIX@|$tmp|g" -e "s|@LISTEN@|127.0.0.1:$listen|" \
-    -e "s|@SERVERS@|$servers|" "$src/docker/nginx.conf" >"$tmp/nginx.conf"
-  "$nginx_bin" -p "$tmp" -c "$tmp/nginx.conf" -e "$tmp/error.log"
-  for _ in $(seq 100); do [ -f "$tmp/nginx.pid" ] && break; sleep 0.05; done
+  rm -rf "$tmp/nginx"
+  mkdir -p "$tmp/nginx"
+  NGINX_UNLIMITED=1 nginx_loopback "$tmp/nginx" "$src" "${ports[@]}"
+  listen=$NGINX_HTTP
 }
 drive() { # port -> "search_rps cheap_rps"
   python3 - "$1" <<'PY'

@@ -4,7 +4,8 @@
 #   setup.sh          what building and running need
 #   setup.sh --test   also the tools some tests use: promtool (prometheus)
 #                     to check /metrics, systemd-analyze (systemd) to verify
-#                     the unit, nginx in front of replicas, python3 and its
+#                     the unit, nginx in front of replicas (openssl for its
+#                     throwaway certificate), python3 and its
 #                     jsonschema for the examples' and the contract's checks,
 #                     node and npm for the contract's linter (the pinned
 #                     @redocly/cli of api/lint) and the explorer's browser
@@ -23,7 +24,7 @@ pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-d
   zlib1g-dev libsqlite3-dev libpq-dev)
 extras=()
 if [ "${1:-}" = --test ]; then
-  extras=(prometheus nginx python3 python3-jsonschema systemd chromium postgresql)
+  extras=(prometheus nginx openssl python3 python3-jsonschema systemd chromium postgresql)
   extras+=(python3-matplotlib)
   command -v npm >/dev/null || extras+=(nodejs npm)
   # the Python client's tests and notebooks (python/, notebooks/)

@@ -18,20 +18,52 @@ test -f "$prefix/include/stickslip.h"
 test -f "$libdir/libstickslip.a" || { echo "no static library"; exit 1; }
 test -f "$prefix/share/doc/stickslip/LICENSE"
 
-# pkg-config; a static-only installation needs the private libraries
+# pkg-config, as stickslip.pc's comment says: a shared library outside the
+# linker's search path is found with the run path it names (without one
+# the program does not start), stickslip-static.pc links the archive, and
+# --static with -static gives a program that needs no shared library
 export PKG_CONFIG_PATH=$libdir/pkgconfig
-static=--static
+runs() { # runs BINARY: it prints the orbit
+  local out
+  out=$("$@" 2>&1) || { echo "$1: $out"; return 1; }
+  case $out in *"$want"*) ;; *) echo "$1 printed: $out"; return 1 ;; esac
+}
+needs_lib() { readelf -d "$1" | grep -q 'NEEDED.*libstickslip'; }
+# a static-only installation: stickslip.pc needs --static (the libraries
+# libstickslip.a uses)
+kind=static static=--static
 if [ -e "$libdir/libstickslip.so" ]; then
-  static=
+  kind=shared static=
   soname=$(readelf -d "$libdir/libstickslip.so" | sed -n 's/.*SONAME.*\[\(.*\)\]/\1/p')
   case $soname in libstickslip.so.[0-9]*) ;; *) echo "soname $soname"; exit 1 ;; esac
+  # shellcheck disable=SC2046
+  "$cc" -o "$tmp/example_norpath" "$src/tests/example/example.c" \
+    $(pkg-config --cflags --libs stickslip)
+  needs_lib "$tmp/example_norpath"
+  if out=$("$tmp/example_norpath" 2>&1); then
+    echo "a program linked without a run path started: $out"; exit 1
+  fi
+  case $out in *"$soname: cannot open shared object file"*) ;;
+    *) echo "without a run path: $out"; exit 1 ;; esac
+  LD_LIBRARY_PATH=$(pkg-config --variable=libdir stickslip) runs "$tmp/example_norpath"
 fi
 # shellcheck disable=SC2046,SC2086
 "$cc" -o "$tmp/example_pc" "$src/tests/example/example.c" \
-  $(pkg-config $static --cflags --libs stickslip) -Wl,-rpath,"$libdir"
-out=$("$tmp/example_pc")
-case $out in *"$want"*) ;; *) echo "pkg-config build printed: $out"; exit 1 ;; esac
-echo "pkg-config: $(pkg-config --modversion stickslip), $([ -n "$static" ] && echo static || echo shared)"
+  $(pkg-config $static --cflags --libs stickslip) \
+  -Wl,-rpath,"$(pkg-config --variable=libdir stickslip)"
+runs "$tmp/example_pc"
+# shellcheck disable=SC2046
+"$cc" -o "$tmp/example_pc_static" "$src/tests/example/example.c" \
+  $(pkg-config --cflags --libs stickslip-static)
+! needs_lib "$tmp/example_pc_static" || { echo "stickslip-static linked the shared library"; exit 1; }
+runs "$tmp/example_pc_static"
+# shellcheck disable=SC2046
+"$cc" -static -o "$tmp/example_static" "$src/tests/example/example.c" \
+  $(pkg-config --static --cflags --libs stickslip)
+! readelf -d "$tmp/example_static" | grep -q NEEDED ||
+  { echo "pkg-config --static with -static linked a shared library"; exit 1; }
+runs "$tmp/example_static"
+echo "pkg-config: $(pkg-config --modversion stickslip), $kind; stickslip-static and --static -static: static"
 
 # find_package, asking for the header's major.minor version (the ABI)
 abi=$(sed -n 's/^#define SS_VERSION_\(MAJOR\|MINOR\) \([0-9]*\)$/\2/p' \
@@ -48,8 +80,7 @@ CM
 "$cmake" -S "$tmp/consumer" -B "$tmp/consumer/build" -DCMAKE_C_COMPILER="$cc" \
   -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_RPATH="$libdir" >/dev/null
 "$cmake" --build "$tmp/consumer/build" >/dev/null
-out=$("$tmp/consumer/build/example")
-case $out in *"$want"*) ;; *) echo "find_package build printed: $out"; exit 1 ;; esac
+runs "$tmp/consumer/build/example"
 echo "find_package: ok"
 
 # the daemon, when it was built: it runs from the prefix, with its man page

@@ -1,21 +1,25 @@
 #!/usr/bin/env bash
-# Replicas behind nginx, on loopback: nginx (docker/nginx.conf, its
-# placeholders filled in) in front of three stickslipd; 500 computations
-# through nginx from 8 clients at once, one replica killed (SIGKILL) while
-# they run; every computation must be answered once, 200, and with the same
-# answer a daemon gives directly.  Skipped (77) where nginx or python3 is
-# not installed (scripts/setup.sh --test installs them).
+# Replicas behind nginx, on loopback: nginx (docker/nginx.conf, run by
+# loopback.sh with its ports and a throwaway certificate) in front of three
+# stickslipd; 500 computations over TLS from 8 clients at once (8 addresses,
+# each within the rate limit), one replica killed (SIGKILL) while they run;
+# every computation must be answered once, 200, and with the same answer a
+# daemon gives directly.  Then one address over the rate limit gets 429s.
+# Skipped (77) where nginx, openssl or python3 is not installed
+# (scripts/setup.sh --test installs them).
 # Usage: check_nginx.sh STICKSLIPD SOURCE_DIR
 set -euo pipefail
 bin=$1 src=$2
 command -v nginx >/dev/null || command -v /usr/sbin/nginx >/dev/null ||
   { echo "nginx: not installed, skipped"; exit 77; }
 command -v python3 >/dev/null || { echo "python3: not installed, skipped"; exit 77; }
-nginx_bin=$(command -v nginx || echo /usr/sbin/nginx)
+command -v openssl >/dev/null || { echo "openssl: not installed, skipped"; exit 77; }
+# shellcheck source=tests/nginx/loopback.sh
+. "$src/tests/nginx/loopback.sh"
 tmp=$(mktemp -d)
 pids=()
 cleanup() {
-  [ -f "$tmp/nginx.pid" ] && kill "$(cat "$tmp/nginx.pid")" 2>/dev/null || true
+  nginx_stop "$tmp"
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
   wait 2>/dev/null || true
   rm -rf "$tmp"
@@ -36,31 +40,35 @@ for i in 0 1 2 3; do
   done
   ports+=("$(sed -n 's/.*:\([0-9]*\)$/\1/p' "$tmp/d$i.log" | head -1)")
 done
-listen=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
-servers=""
-for i in 0 1 2; do
-  servers+="server 127.0.0.1:${ports[$i]} max_fails=1 fail_timeout=5s; "
-done
-mkdir -p "$tmp/body" "$tmp/proxy" "$tmp/fastcgi" "$tmp/uwsgi" "$tmp/scgi"
-sed -e "s|@PREFIX@|$tmp|g" -e "s|@LISTEN@|127.0.0.1:$listen|" \
-  -e "s|@SERVERS@|$servers|" "$src/docker/nginx.conf" >"$tmp/nginx.conf"
-"$nginx_bin" -t -q -p "$tmp" -c "$tmp/nginx.conf" -e "$tmp/error.log"
-"$nginx_bin" -p "$tmp" -c "$tmp/nginx.conf" -e "$tmp/error.log"
-for _ in $(seq 100); do
-  [ -f "$tmp/nginx.pid" ] && break
-  sleep 0.05
-done
+nginx_loopback "$tmp" "$src" "${ports[0]}" "${ports[1]}" "${ports[2]}"
 
-python3 - "$listen" "${ports[3]}" "${pids[1]}" <<'PY'
-import json, os, signal, sys, threading, time, urllib.request
+python3 - "$NGINX_TLS" "${ports[3]}" "${pids[1]}" "$NGINX_CA" "$NGINX_HTTP" <<'PY'
+import http.client, json, os, signal, ssl, sys, threading, time
 proxy, direct, victim = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
+tls = ssl.create_default_context(cafile=sys.argv[4])
+plain = int(sys.argv[5])
 
-def post(port, path, body, rid):
-    req = urllib.request.Request(
-        "http://127.0.0.1:%d%s" % (port, path), data=json.dumps(body).encode(),
-        headers={"Content-Type": "application/json", "X-Request-Id": rid})
-    with urllib.request.urlopen(req, timeout=60) as r:
-        return r.status, r.headers.get("X-Request-Id"), json.loads(r.read())
+def connect(port, source="127.0.0.1", secure=False):
+    if secure:
+        return http.client.HTTPSConnection("127.0.0.1", port, timeout=60,
+                                           source_address=(source, 0),
+                                           context=tls)
+    return http.client.HTTPConnection("127.0.0.1", port, timeout=60,
+                                      source_address=(source, 0))
+
+def request(conn, method, path, body=None, rid=None):
+    headers = {"Content-Type": "application/json"}
+    if rid:
+        headers["X-Request-Id"] = rid
+    conn.request(method, path, body=body and json.dumps(body).encode(),
+                 headers=headers)
+    r = conn.getresponse()
+    return r.status, r.headers, r.read()
+
+def post(port, path, body, rid, conn=None):
+    conn = conn or connect(port)
+    st, headers, data = request(conn, "POST", path, body, rid)
+    return st, headers.get("X-Request-Id"), json.loads(data)
 
 # 500 computations: simulations of the paper's orbit from 500 states, and
 # orbits from guesses at 500 values of ur
@@ -82,7 +90,10 @@ errors = []
 lock = threading.Lock()
 nxt = [0]
 
-def worker():
+def worker(k):
+    # each client from an address of its own, over TLS, keeping its
+    # connection while nginx keeps it
+    conn = connect(proxy, "127.0.0.%d" % (10 + k), secure=True)
     while True:
         with lock:
             i = nxt[0]
@@ -91,15 +102,16 @@ def worker():
             return
         path, body = jobs[i]
         try:
-            st, rid, ans = post(proxy, path, body, "job-%d" % i)
+            st, rid, ans = post(proxy, path, body, "job-%d" % i, conn)
             if st != 200 or rid != "job-%d" % i:
                 errors.append("job %d: status %d, id %s" % (i, st, rid))
             answers[i] = ans
         except Exception as e:
             errors.append("job %d: %s" % (i, e))
+            conn.close()
 
 t0 = time.time()
-threads = [threading.Thread(target=worker) for _ in range(8)]
+threads = [threading.Thread(target=worker, args=(k,)) for k in range(8)]
 for t in threads:
     t.start()
 while nxt[0] < 150:
@@ -124,9 +136,37 @@ for i, (path, body) in enumerate(jobs):
         wrong += 1
 if wrong:
     sys.exit("nginx: %d answers differ from the direct daemon's" % wrong)
-print("nginx: 500 computations through 3 replicas in %.2f s, one replica "
-      "killed after %d were sent; all answered once, 200, as the direct "
-      "daemon answers" % (dt, killed_at))
+print("nginx: 500 computations over TLS through 3 replicas in %.2f s, one "
+      "replica killed after %d were sent; all answered once, 200, as the "
+      "direct daemon answers" % (dt, killed_at))
+
+# The rate limit: 600 requests at once from one address, over 4
+# connections, well past 100 a second and a burst of 200.
+codes = []
+def hammer():
+    c = connect(plain, "127.0.0.99")
+    for _ in range(150):
+        st, headers, data = request(c, "GET", "/health")
+        codes.append(st)
+        if st == 429:
+            problem = json.loads(data)
+            if (problem.get("status") != 429 or headers.get("Retry-After") != "1"
+                    or "problem+json" not in headers.get("Content-Type", "")):
+                sys.exit("nginx: a 429 of the limit: %r %r" % (dict(headers), data))
+t0 = time.time()
+threads = [threading.Thread(target=hammer) for _ in range(4)]
+for t in threads:
+    t.start()
+for t in threads:
+    t.join()
+dt = time.time() - t0
+limited, ok = codes.count(429), codes.count(200)
+# 100/s past a burst of 200: at most about 200 + 100 dt answered
+if limited == 0 or ok + limited != 600 or ok > 200 + 100 * dt + 10:
+    sys.exit("nginx: 600 requests from one address in %.2f s: %d answered, "
+             "%d limited (429)" % (dt, ok, limited))
+print("nginx: 600 requests from one address in %.2f s: %d answered, %d got "
+      "429 (100 a second, bursts of 200)" % (dt, ok, limited))
 PY
 # the killed replica's requests went elsewhere: nginx logged the failures it
 # sent on to another replica
