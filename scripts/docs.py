@@ -85,7 +85,9 @@ def http_reference(spec):
                                    op["operationId"].lower()), ""]
         if op.get("description"):
             out += [op["description"].strip(), ""]
-        params = [p for p in op.get("parameters", []) if "$ref" not in p]
+        params = [doc["components"]["parameters"][
+            p["$ref"].rsplit("/", 1)[1]] if "$ref" in p else p
+            for p in op.get("parameters", [])]
         if params:
             out += ["| parameter | in | type | what |", "| --- | --- | --- | --- |"]
             for p in params:
@@ -106,7 +108,7 @@ def http_reference(spec):
             for media, m in content.items():
                 sch = m.get("schema") or m.get("itemSchema") or {}
                 what = schema_type(sch) if sch else cell(r.get("description", ""))
-                if "itemSchema" in m:
+                if "itemSchema" in m and sch:
                     what = "lines, each " + what
                 out.append("| %s | %s | %s |" % (code, media and "`%s`" % media,
                                                  what))
