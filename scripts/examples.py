@@ -1,39 +1,44 @@
 #!/usr/bin/env python3
-"""The README's and the contract's examples, against a live daemon.
+"""The examples of the README, the user's guide and the contract, against a
+live daemon.
 
   python3 scripts/examples.py --check STICKSLIPD   (what CI runs)
   python3 scripts/examples.py --write STICKSLIPD   (regenerate them)
 
 Starts STICKSLIPD on a free port, then
-  - README.md: every ```sh block that is a curl command followed (before the
-    next ```sh block) by a fenced output block: the command is run against
+  - README.md and every page of docs/: every ```sh block that is a curl
+    command followed by a fenced output block: the command is run against
     the daemon and its answer compared with the block (JSON or NDJSON,
     numbers to a relative 1e-9, the keys that change from run to run left
     out: seconds, uptime_seconds, a request_id the request did not set);
   - api/openapi.json: every request example of a POST is sent, and the
     response example of the same name compared the same way.
 --check fails (exit 1) on the first difference and says where; --write
-puts the daemon's answers in place (the README's as the daemon prints them,
+puts the daemon's answers in place (the pages' as the daemon prints them,
 the contract's as JSON values or NDJSON text).  Standard library only.
 """
 import json
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
+import tempfile
 import urllib.error
 import urllib.request
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-README = os.path.join(ROOT, "README.md")
+PAGES = [os.path.join(ROOT, "README.md")] + sorted(
+    os.path.join(d, f) for d, _, fs in os.walk(os.path.join(ROOT, "docs"))
+    for f in fs if f.endswith(".md"))
 SPEC = os.path.join(ROOT, "api", "openapi.json")
 VOLATILE = {"seconds", "uptime_seconds", "in_flight"}
 
 
-def start(binary):
-    p = subprocess.Popen([binary, "--port", "0", "--quiet"],
-                         stderr=subprocess.PIPE, text=True)
+def start(binary, state):
+    p = subprocess.Popen([binary, "--port", "0", "--quiet", "--state-dir",
+                          state], stderr=subprocess.PIPE, text=True)
     line = p.stderr.readline()
     m = re.search(r"http://[^ \n]+", line)
     if not m:
@@ -55,7 +60,7 @@ def request(base, method, path, body=None, headers=None):
 
 
 def curl(base, command):
-    """Run a README curl command (-s, -H, -d, -X, a URL) with urllib."""
+    """Run a page's curl command (-s, -H, -d, -X, a URL) with urllib."""
     args = shlex.split(command.replace("\\\n", " "))
     if not args or args[0] != "curl":
         return None
@@ -63,8 +68,8 @@ def curl(base, command):
     i = 1
     while i < len(args):
         a = args[i]
-        if a in ("-s", "-S", "-sS", "--silent"):
-            pass
+        if a in ("-s", "-S", "-sS", "--silent", "-si", "-i", "-sN", "-N"):
+            pass  # silent, headers shown, no buffering: the same answer
         elif a in ("-H", "--header"):
             k, v = args[i + 1].split(":", 1)
             headers[k.strip()] = v.strip()
@@ -82,7 +87,7 @@ def curl(base, command):
         i += 1
     path = re.sub(r"^https?://[^/]+", "", url)
     return request(base, method or ("POST" if body is not None else "GET"),
-                   path, body, headers)[1]
+                   path, body, headers)
 
 
 def normal(text, keep_id):
@@ -135,28 +140,41 @@ def same(a, b, where="", rtol=1e-9):
 FENCE = re.compile(r"^```([a-z]*)\n(.*?)^```\n", re.S | re.M)
 
 
-def readme(base, write):
-    text = open(README).read()
+def page(base, name, write):
+    text = open(name).read()
     blocks = list(FENCE.finditer(text))
     out, last, checked = [], 0, 0
+    rel = os.path.relpath(name, ROOT)
     for i, b in enumerate(blocks):
         if b.group(1) != "sh" or not b.group(2).lstrip().startswith("curl"):
             continue
+        line = text[:b.start()].count("\n") + 2
         nxt = blocks[i + 1] if i + 1 < len(blocks) else None
         if not nxt or nxt.group(1) not in ("json", ""):
+            # no answer shown: each command of the block must succeed
+            for cmd in re.split(r"(?<!\\)\n", b.group(2).strip()):
+                cmd = re.sub(r"\s+#.*$", "", cmd)
+                if not cmd.startswith("curl") or "<" in cmd:
+                    continue
+                status, _ = curl(base, cmd)
+                checked += 1
+                if not 200 <= status < 300:
+                    print("%s:%d: the daemon answered %d" % (rel, line, status))
+                    return checked, False
             continue
         keep_id = "X-Request-Id" in b.group(2)
         want = nxt.group(2)
         try:
-            want_v = normal(want, keep_id)
+            want_v = normal(want, keep_id) if want.strip() else None
         except ValueError:
             continue  # not an answer (a shell session, a sketch)
-        answer = curl(base, b.group(2).strip())
-        d = same(want_v, normal(answer, keep_id))
+        answer = curl(base, b.group(2).strip())[1]
+        d = same(want_v, normal(answer, keep_id)) if want_v is not None \
+            else "no answer written yet"
         checked += 1
         if d and not write:
             line = text[:nxt.start()].count("\n") + 2
-            print("README.md:%d: the answer differs at %s" % (line, d))
+            print("%s:%d: the answer differs at %s" % (rel, line, d))
             return checked, False
         if d and write:
             out.append(text[last:nxt.start(2)])
@@ -164,7 +182,7 @@ def readme(base, write):
             last = nxt.end(2)
     if write:
         out.append(text[last:])
-        open(README, "w").write("".join(out))
+        open(name, "w").write("".join(out))
     return checked, True
 
 
@@ -215,14 +233,21 @@ def main():
     if len(sys.argv) != 3 or sys.argv[1] not in ("--check", "--write"):
         sys.exit(__doc__)
     write = sys.argv[1] == "--write"
-    proc, base = start(sys.argv[2])
+    state = tempfile.mkdtemp(prefix="stickslip-examples-")
+    proc, base = start(sys.argv[2], state)
     try:
-        n1, ok1 = readme(base, write)
+        n1, ok1 = 0, True
+        for name in PAGES:
+            n, ok1 = page(base, name, write)
+            n1 += n
+            if not ok1:
+                break
         n2, ok2 = spec(base, write) if ok1 else (0, False)
     finally:
         proc.terminate()
         proc.wait()
-    print("examples: %d in README.md, %d in api/openapi.json %s" %
+        shutil.rmtree(state, ignore_errors=True)
+    print("examples: %d in README.md and docs/, %d in api/openapi.json %s" %
           (n1, n2, "written" if write else "checked" if ok1 and ok2
            else "- differ"))
     sys.exit(0 if ok1 and ok2 else 1)

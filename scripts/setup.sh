@@ -22,10 +22,16 @@
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-dev
   zlib1g-dev libsqlite3-dev libpq-dev)
-extras=()
+# mkdocs builds the user's guide that the daemon serves at /docs/; the build
+# goes on without it (and serves none), so as another user it is only
+# said.  Pinned by the release: Debian 12 ships mkdocs 1.4.2, which
+# mkdocs.yml and its built-in theme are written for.
+extras=(mkdocs)
 if [ "${1:-}" = --test ]; then
-  extras=(prometheus nginx openssl python3 python3-jsonschema systemd chromium postgresql)
+  extras+=(prometheus nginx openssl python3 python3-jsonschema systemd chromium postgresql)
   extras+=(python3-matplotlib)
+  # CITATION.cff against its schema (tests/release)
+  extras+=(python3-yaml)
   command -v npm >/dev/null || extras+=(nodejs npm)
   # the Python client's tests and notebooks (python/, notebooks/)
   extras+=(python3-pytest python3-tqdm mypy python3-numpy python3-pandas python3-matplotlib

@@ -156,6 +156,10 @@ typedef struct srv__req {
   char job_path[32];                /* ... and its endpoint */
   char location[16 + STORE_ID_LEN]; /* a 201's Location, or "" */
   srv__results *res;                /* GET /jobs/{id}/results being answered */
+  /* a page of the user's guide (docs.c) */
+  const char *doc; /* its bytes, embedded; NULL for anything else */
+  size_t doc_len;
+  const char *doc_ctype;
 } srv__req;
 
 /* ---- daemon.c ------------------------------------------------------------ */
@@ -172,6 +176,9 @@ api_server_info srv__server_info(struct srv_daemon *d, srv_job *job);
  * of the handler. */
 enum MHD_Result srv__defer(srv__req *r, api_problem_kind kind,
                            const char *detail, const char *allow);
+/* Whether the client holds the representation of @a r's static answer
+ * (If-None-Match names r->etag, or its gzip variant when it takes gzip). */
+int srv__not_modified(struct MHD_Connection *c, const srv__req *r);
 /* Queue @a r's work in the pool (resumed with r->ar), or refuse it. */
 enum MHD_Result srv__submit(struct srv_daemon *d, struct MHD_Connection *c,
                             srv__req *r);
@@ -301,6 +308,14 @@ void srv__jobs_unwait(srv__jobs *js, srv__results *res);
 void srv__jobs_fetch(srv__jobs *js, srv__results *res);
 /* The store's counts into the metrics (at most once a second). */
 void srv__jobs_metrics(srv__jobs *js);
+
+/* ---- docs.c: the user's guide at /docs/ ---------------------------------- */
+
+/* Admission of a request whose path is the guide's (/docs...): the page
+ * into r->doc, or an answer deferred; 0 when the path is not the guide's. */
+int srv__docs_admit(srv__req *r, const char *url, const char *method);
+/* The last call of a page's request: the page, or 304. */
+enum MHD_Result srv__docs_answer(struct MHD_Connection *c, srv__req *r);
 
 /* ---- jobs_http.c: jobs over HTTP ----------------------------------------- */
 

@@ -279,6 +279,8 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
                       NULL);
   if (srv__jobs_admit(d, c, r, url, method))
     return MHD_YES; /* /jobs...: answered on the last call */
+  if (srv__docs_admit(r, url, method))
+    return MHD_YES; /* /docs...: likewise */
   int route = api_route(method, url, &ep);
   if (route == 404)
     return srv__defer(r, API_P_NOT_FOUND, "no such resource; see /openapi.json",
@@ -482,6 +484,16 @@ static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
   return srv__submit(d, c, r);
 }
 
+int srv__not_modified(struct MHD_Connection *c, const srv__req *r) {
+  const char *inm =
+      MHD_lookup_connection_value(c, MHD_HEADER_KIND, "If-None-Match");
+  /* the validator of the representation that would be sent */
+  char tag[40];
+  snprintf(tag, sizeof tag, "%.*s%s\"", (int)strlen(r->etag) - 1, r->etag,
+           r->gzip ? "-gzip" : "");
+  return inm && (strstr(inm, tag) || !strcmp(inm, "*"));
+}
+
 /* ---- libmicrohttpd's callbacks ------------------------------------------- */
 
 /* libmicrohttpd's handler: called with the headers, with each piece of the
@@ -529,19 +541,15 @@ enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
     return srv__send_body(c, r, 204, NULL, 0, NULL, 0, r->preflight, 0);
   if (r->jobs) /* the store is read in the pool (jobs_http.c) */
     return srv__submit(d, c, r);
+  if (r->doc)
+    return srv__docs_answer(c, r);
   if (!r->is_post) {
     api_response ar;
     if (d->etags[r->ep][0]) {
       /* the contract and the explorer's files change only with the binary:
        * a validator and a lifetime, and 304 to a client that has them */
       r->etag = d->etags[r->ep];
-      const char *inm =
-          MHD_lookup_connection_value(c, MHD_HEADER_KIND, "If-None-Match");
-      /* the validator of the representation that would be sent */
-      char tag[40];
-      snprintf(tag, sizeof tag, "%.*s%s\"", (int)strlen(r->etag) - 1, r->etag,
-               r->gzip ? "-gzip" : "");
-      if (inm && (strstr(inm, tag) || !strcmp(inm, "*")))
+      if (srv__not_modified(c, r))
         return srv__send_body(c, r, 304, NULL, 0, "application/json", 0, NULL,
                               0);
     }

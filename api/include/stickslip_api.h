@@ -349,6 +349,20 @@ const char *api_openapi_json(void);
  *  "style.css", their length into *len; NULL for another name. */
 const char *api_explorer_asset(const char *name, size_t *len);
 
+/** Whether this build embeds the user's guide (docs/, built by mkdocs when
+ *  it was installed at build time). */
+int api_docs_built(void);
+
+/**
+ * A file of the embedded user's guide by its @a path under the guide's root
+ * ("index.html", "api/orbit.html", "css/base.css"; a path ending in "/" is
+ * its index.html): its bytes (the same for the life of the binary), their
+ * length into *len, its media type into *ctype and a validator (a quoted
+ * ETag) into *etag; NULL when the guide has no such file.
+ */
+const char *api_docs_file(const char *path, size_t *len, const char **ctype,
+                          const char **etag);
+
 /**
  * The body of row @a i when it is static (the contract and the explorer's
  * files: the same bytes for the life of the binary, so that a server can

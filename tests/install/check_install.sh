@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The installation works as a user meets it: install the build into a fresh
-# prefix, then build the README's example program against the installed
+# prefix, then build the guide's example program against the installed
 # copy, once with pkg-config and once with find_package(stickslip), and run
 # both; check what else is installed (the static library beside a shared
 # one, the daemon, its man page, the systemd unit).
