@@ -143,13 +143,17 @@ static void *worker(void *arg) {
     client *c = j->owner;
     c->running -= 1 + j->extra;
     p->running -= 1 + j->extra;
+    /* The slot this job held is this thread's again: it takes the next job
+     * itself, so no other thread need wake, unless the job had borrowed
+     * threads, whose slots are free now too. */
+    if (j->extra)
+      pthread_cond_broadcast(&p->work);
     j->extra = 0;
     client_release(p, c);
     all_unlink(p, j);
     j->state = atomic_load(&j->cancel) ? SRV_JOB_CANCELLED : SRV_JOB_DONE;
-    /* another of this client's jobs may now run */
-    pthread_cond_broadcast(&p->work);
-    pthread_cond_broadcast(&p->idle);
+    if (!p->all)
+      pthread_cond_broadcast(&p->idle); /* srv_pool_wait_idle */
     pthread_mutex_unlock(&p->mu);
     j->ops->done(j); /* the job's owner may free it from here on */
     pthread_mutex_lock(&p->mu);

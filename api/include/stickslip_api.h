@@ -181,6 +181,14 @@ int api_batch_run(api_batch *b, size_t i, const api_limits *lim,
  *  memory. */
 api_stream *api_batch_line(const api_batch *b, size_t i, api_response *item,
                            size_t *held);
+/** The same line appended to the text *buf (*len bytes of *cap allocated,
+ *  grown with realloc; the caller frees it), for an answer @a item that is
+ *  a body: no stream, no allocation of its own.  1 appended (@a item
+ *  consumed); 0 when @a item is a stream (left as it is, for
+ *  api_batch_line); -1 when out of memory (@a item consumed, *len as it
+ *  was). */
+int api_batch_line_put(const api_batch *b, size_t i, api_response *item,
+                       char **buf, size_t *len, size_t *cap);
 /** The last line (a body, malloc'd, in @a out). */
 void api_batch_done(size_t ok, size_t failed, double seconds,
                     api_response *out);

@@ -36,6 +36,8 @@ static void w_grow(api_wbuf *b, size_t n) {
   b->cap = cap;
 }
 
+void api__w_room(api_wbuf *b, size_t n) { w_grow(b, n); }
+
 void api__w_put(api_wbuf *b, const char *s, size_t n) {
   w_grow(b, n);
   if (b->oom)
