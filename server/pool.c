@@ -296,6 +296,13 @@ void srv_pool_load(srv_pool *p, srv_pool_load_t *out) {
   pthread_mutex_unlock(&p->mu);
 }
 
+int srv_pool_idle(srv_pool *p) {
+  pthread_mutex_lock(&p->mu);
+  int idle = p->waiting == 0 && p->running < p->n_threads;
+  pthread_mutex_unlock(&p->mu);
+  return idle;
+}
+
 void srv_pool_drain(srv_pool *p) { drop_waiting(p, 1, SRV_JOB_REFUSED); }
 
 void srv_pool_cancel_all(srv_pool *p) {

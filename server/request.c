@@ -18,10 +18,12 @@
  * round robin, a bounded queue per client, at most client_workers running
  * per client), and resumed with its answer by the worker that computed it.
  * What needs no computing (the api's inline endpoints, and every refusal)
- * is answered on the I/O thread at once.  POST /batch is batch.c's: its
- * body is parsed in the pool too, and its answer started when the request
- * is resumed.  Nothing whose work grows with the body runs on the I/O
- * thread, which only collects the bytes.
+ * is answered on the I/O thread at once, and so is a computation the api
+ * calls small and bounded (an /orbit from a guess) when it is the only
+ * request in flight and the pool idles (answer_small).  POST /batch is
+ * batch.c's: its body is parsed in the pool too, and its answer started when
+ * the request is resumed.  Nothing whose work grows with the body runs on the
+ * I/O thread, which only collects the bytes.
  *
  * Completion.  Metrics, one line of access log, and the connection's
  * deadline for its next request.
@@ -466,11 +468,43 @@ enum MHD_Result srv__submit(struct srv_daemon *d, struct MHD_Connection *c,
       "the computation could not be queued", NULL, 0, NULL);
 }
 
+/* A body no larger than this may be answered on the I/O thread. */
+#define SMALL_BODY 2048
+
+/* Answer @a r at once, on the I/O thread, when its work is small and
+ * bounded (the api says: an /orbit from a guess, about 10 us), it is the
+ * only request in flight and the pool is idle, so that it takes no turn
+ * from queued work: a hand-off to a worker and back (two thread wake-ups,
+ * a suspended connection resumed) costs several times such a computation.
+ * With other requests in flight the pool's workers compute beside the I/O
+ * thread, which alone would hold the throughput to one core.  0 when it is
+ * not answered here. */
+static int answer_small(struct srv_daemon *d, struct MHD_Connection *c,
+                        srv__req *r, enum MHD_Result *ok) {
+  if (r->len > SMALL_BODY || r->async ||
+      api_endpoint_at(r->ep)->run_class != API_RUN_COMPUTE ||
+      srv_metrics_in_flight(d->metrics, 0) > 1 || !srv_pool_idle(d->pool))
+    return 0;
+  api_response ar;
+  api_server_info info = srv__server_info(d, &r->job);
+  info.small_only = 1;
+  /* not a job of the pool: no threads to borrow, nothing to cancel */
+  info.threads = NULL;
+  info.cancelled = NULL;
+  if (api_handle(r->ep, r->buf ? r->buf : "", r->len, &d->cfg.lim, &info,
+                 &ar) == 0)
+    return 0;
+  *ok = srv__send_api(c, r, &ar, NULL);
+  return 1;
+}
+
 /* The body of a computation is in: refused at once while the daemon shuts
  * down or the memory budget (or the client's share of it) is spent; else it
- * goes to the pool (a batch's body to be parsed there). */
+ * is answered at once when small, or goes to the pool (a batch's body to be
+ * parsed there). */
 static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
                                srv__req *r) {
+  enum MHD_Result ok;
   if (atomic_load(&d->draining))
     return srv__send_problem(c, r, API_P_SHUTTING_DOWN,
                              "the server is shutting down", NULL, 0, NULL);
@@ -479,6 +513,8 @@ static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
     srv__budget_problem(d, r->key, &ar);
     return srv__send_api(c, r, &ar, NULL);
   }
+  if (answer_small(d, c, r, &ok))
+    return ok;
   return srv__submit(d, c, r);
 }
 

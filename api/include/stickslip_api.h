@@ -131,12 +131,18 @@ typedef struct api_server_info {
    *  computations until the request ends.  NULL: @a want. */
   unsigned (*threads)(void *cls, unsigned want);
   void *threads_cls;
+  /** Serve a computing request only when its work is small and bounded,
+   *  microseconds whatever its numbers (an /orbit from a guess without
+   *  samples, a /stability); any other is left: api_handle answers status
+   *  0, @a out empty, for the server to run where long work runs. */
+  int small_only;
 } api_server_info;
 
 /**
  * Serve endpoint @a index: for API_RUN_COMPUTE, parse, validate, compute and
  * encode @a body; for API_RUN_INLINE, @a body is ignored.  Always fills
- * @a out (a result or a problem); returns out->status.  @a srv may be NULL
+ * @a out (a result or a problem), unless @a srv->small_only leaves the
+ * request (status 0); returns out->status.  @a srv may be NULL
  * (the meta endpoints then report what they can).  Thread-safe.
  */
 int api_handle(size_t index, const char *body, size_t len,
