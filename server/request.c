@@ -328,6 +328,7 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
     const char *name;
     if (errno == ERANGE || n > body_limit(d, r, &name))
       return too_large(d, c, r);
+    r->expect = (size_t)n;
   }
   return MHD_YES;
 }
@@ -354,19 +355,24 @@ static enum MHD_Result take_body(struct srv_daemon *d, srv__req *r,
     return MHD_YES;
   }
   if (r->len + n + 1 > r->cap) {
+    /* room for the whole body at once when its length was told (it is
+     * within the limit), else twice as much as needed; the room is what
+     * the budget counts */
     size_t cap = r->cap ? r->cap : 4096;
+    if (r->expect >= r->len + n)
+      cap = r->expect + 1;
     while (cap < r->len + n + 1)
       cap *= 2;
     char *b = realloc(r->buf, cap);
     if (!b)
       return MHD_NO;
     r->buf = b;
+    srv__hold(d, r, (long)(cap - r->cap));
     r->cap = cap;
   }
   memcpy(r->buf + r->len, data, n);
   r->len += n;
   r->buf[r->len] = 0;
-  srv__hold(d, r, (long)n);
   return MHD_YES;
 }
 
@@ -416,7 +422,7 @@ static void job_run(srv_job *j) {
   /* the body is no longer needed: give its bytes back now */
   free(r->buf);
   r->buf = NULL;
-  srv__hold(r->d, r, -(long)r->len);
+  srv__hold(r->d, r, -(long)r->cap);
   r->len = r->cap = 0;
 }
 
