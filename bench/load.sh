@@ -4,7 +4,10 @@
 # /health, /orbit with and without a guess and /simulate of 100 periods;
 # /health while long computations keep every worker busy; and a /batch of
 # 2500 /orbit items against the same 2500 requests sent one by one on 2
-# connections.
+# connections; and what the daemon's CPU (from /proc) costs for an /orbit
+# from a guess, one /batch item or one request alone, against bench_orbit's
+# solve of the same orbit in the same run, with perf's split of the batch's
+# cycles by library when perf is installed.
 # Usage: bench/load.sh [build-dir] [seconds] [connections]
 # Writes bench/results/load.md.  Installs wrk when run as root and missing.
 set -euo pipefail
@@ -18,10 +21,10 @@ if ! command -v wrk >/dev/null; then
 fi
 bash scripts/setup.sh
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DSTICKSLIP_BUILD_TESTS=OFF >/dev/null
-cmake --build "$build" -j"$(nproc)" --target stickslipd >/dev/null
+cmake --build "$build" -j"$(nproc)" --target stickslipd bench_orbit >/dev/null
 tmp=$(mktemp -d)
 trap 'kill "$pid" 2>/dev/null || true; wait "$pid" 2>/dev/null || true; rm -rf "$tmp"' EXIT
-"$build/server/stickslipd" --port 0 --quiet --client-queue 100000 --client-workers "$(nproc)" 2>"$tmp/log" &
+"$build/server/stickslipd" --port 0 --quiet --no-jobs --client-queue 100000 --client-workers "$(nproc)" 2>"$tmp/log" &
 pid=$!
 for _ in $(seq 100); do grep -q listening "$tmp/log" && break; sleep 0.05; done
 url=$(grep -o 'http://[^ ]*' "$tmp/log" | head -1)
@@ -104,6 +107,12 @@ long_rps=$(awk '/Requests\/sec/ {print $2}' "$tmp/long.out")
 } >> "$out"
 echo "health while saturated: $res"
 
+# The daemon's CPU-seconds so far (utime + stime of /proc/PID/stat).
+tck=$(getconf CLK_TCK)
+cpu() { awk -v t="$tck" '{printf "%.3f", ($14 + $15) / t}' "/proc/$pid/stat"; }
+# Microseconds of CPU per request between two cpu readings.
+per() { awk -v a="$1" -v b="$2" -v n="$3" 'BEGIN {printf "%.1f", (b - a) / n * 1e6}'; }
+
 # A /batch of n /orbit items against the same n requests one by one on 2
 # keep-alive connections (curl --parallel --parallel-max 2, one process);
 # each way 5 times, the median.
@@ -123,10 +132,13 @@ for i in $(seq "$n"); do
   printf 'url = "%s/orbit"\nheader = "Content-Type: application/json"\n' "$url"
   printf 'data-binary = "@%s"\noutput = "/dev/null"\nwrite-out = "%%{http_code} %%{num_connects}\\n"\n' "$tmp/one.json"
 done > "$tmp/each.cfg"
-batch_t=() each_t=()
+batch_t=() each_t=() batch_cpu=0
 for _ in 1 2 3 4 5; do
+  c0=$(cpu)
   t=$(curl -s -o "$tmp/batch.out" -w '%{time_total}' -H 'Content-Type: application/json' \
         --data-binary @"$tmp/batch.json" "$url/batch")
+  c1=$(cpu)
+  batch_cpu=$(awk -v s="$batch_cpu" -v a="$c0" -v b="$c1" 'BEGIN {print s + b - a}')
   ok=$(grep -o '"ok":[0-9]*' "$tmp/batch.out" | tail -1 | cut -d: -f2)
   [ "$ok" = "$n" ] || { echo "batch: $ok of $n items ok" >&2; exit 1; }
   batch_t+=("$t")
@@ -156,4 +168,56 @@ et=$(median "${each_t[@]}")
     "$n" "$conns" "$et" "$(awk -v t="$et" -v n="$n" 'BEGIN {print n / t}')"
 } >> "$out"
 echo "batch: $bt s, one by one: $et s"
+
+# CPU per unit of work: the solve alone (bench_orbit, median CPU time), a
+# batch item (the 5 batches above), and one request at a time on one
+# connection (wrk -c1: nothing else in flight), /health for the HTTP alone.
+"$build/bench/bench_orbit" "$tmp" >/dev/null
+solve=$(awk -F'|' '/from a guess \(no finite/ {gsub(/[^0-9.]/, "", $4); print $4}' "$tmp/orbit.md")
+item_us=$(per 0 "$batch_cpu" $((5 * n)))
+declare -A one
+for name in health orbit_guess; do
+  c0=$(cpu)
+  res=$(wrk -t1 -c1 -d"${secs}s" -s "$tmp/$name.lua" "$url${path[$name]}" | grep RESULT)
+  c1=$(cpu)
+  read -r _ r _ <<<"$res"
+  one[$name]=$(per "$c0" "$c1" "$(awk -v r="$r" -v s="$secs" 'BEGIN {print r * s}')")
+done
+{
+  echo
+  echo "## The daemon's CPU against the library's"
+  echo
+  echo "CPU time of the daemon (utime + stime from \`/proc\`) per unit of work, against"
+  echo "\`bench_orbit\`'s median CPU time for the same solve (an /orbit from the paper's guess,"
+  echo "no finite differences), all in this run:"
+  echo
+  echo "| work | daemon CPU (us) | solve (us) | ratio / excess |"
+  echo "| --- | ---: | ---: | ---: |"
+  awk -v i="$item_us" -v s="$solve" -v n="$n" 'BEGIN {printf "| a /batch item (%d /orbit items a batch, 5 batches) | %s | %s | %.2f times |\n", n, i, s, i / s}'
+  awk -v o="${one[orbit_guess]}" -v s="$solve" 'BEGIN {printf "| one /orbit from a guess (wrk, 1 connection) | %s | %s | +%.1f us |\n", o, s, o - s}'
+  echo "| one /health (wrk, 1 connection) | ${one[health]} | | |"
+} >> "$out"
+echo "cpu: batch item ${item_us} us, /orbit ${one[orbit_guess]} us, /health ${one[health]} us, solve ${solve} us"
+
+# Where a batch's cycles go: perf over 3 batches, by library.
+if command -v perf >/dev/null && perf record -q -o "$tmp/perf.data" -p "$pid" -- sleep 0.1 2>/dev/null; then
+  perf record -q -o "$tmp/perf.data" -p "$pid" 2>/dev/null &
+  perfpid=$!
+  sleep 0.5
+  for _ in 1 2 3; do
+    curl -s -o /dev/null -H 'Content-Type: application/json' --data-binary @"$tmp/batch.json" "$url/batch"
+  done
+  kill -INT "$perfpid"
+  wait "$perfpid" 2>/dev/null || true
+  {
+    echo
+    echo "Where the daemon's cycles go over 3 such batches (\`perf record\`, by object;"
+    echo "stickslipd holds the computation, the codec and the server, statically linked):"
+    echo
+    echo "| object | share |"
+    echo "| --- | ---: |"
+    perf report -i "$tmp/perf.data" --no-children --sort dso -g none 2>/dev/null |
+      awk '/^ +[0-9.]+%/ && $1 + 0 >= 0.5 {printf "| %s | %s |\n", $2, $1}'
+  } >> "$out"
+fi
 echo "wrote $out"

@@ -6,13 +6,21 @@
  * client), and the I/O thread starts the answer when the pool resumes the
  * request with the items (srv__batch_start).
  * A batch's answer is one chunked response whose lines are written as its
- * items are done.  Its items are jobs of the pool like any request, in the
- * queue of the batch's client; at most batch_parallel of them are in flight
- * (queued, running, or done with a line not yet wholly written), so a
- * batch holds at most that many answers, and its client's other requests
- * still get their turn.  When no line is ready the response's reader
- * suspends the connection, and the next item done resumes it.  When the
- * client goes away the items that wait are dropped and the one that runs
+ * items are done.  Its items are computed by at most batch_parallel
+ * runners, jobs of the pool in the queue of the batch's client like any
+ * request.  A runner takes the batch's next items one after another for a
+ * slice of time (RUN_SLICE), writes each one's line into the batch's buffer
+ * of lines, and goes back to the end of its client's queue, so that the
+ * client's other requests, and other clients, get their turn between runs
+ * as they would between requests; the I/O thread is woken at most twice
+ * per run (for its first line, and at its end), not once per item.  An item
+ * costs about 10 us of computing: a hand-off to the pool and back for each (two
+ * thread wake-ups, a job, a stream) cost ten times that.  The buffer holds at
+ * most BATCH_BUFFER bytes of lines not yet written (a runner takes no item
+ * beyond that; the lines being written restart the runners), so a batch holds
+ * little whatever its client reads.  When no line is ready the response's
+ * reader suspends the connection, and the end of the next run resumes it.  When
+ * the client goes away the runners that wait are dropped and the one that runs
  * is told to stop, as for any request.
  */
 #include <pthread.h>
@@ -24,13 +32,29 @@
 
 #include "internal.h"
 
-typedef struct bitem {
-  srv_job job; /* first: a job is its item */
+/* A run takes items until it has computed this long (and at least one):
+ * others wait at most about this long for a worker a batch holds, and the
+ * run's hand-offs cost a few microseconds in a millisecond. */
+#define RUN_SLICE 1e-3
+/* Lines not yet written that stop the runners: a stream chunk, what the
+ * response's reader takes at a time (of a client that does not read, the
+ * batch then holds about this much, not answers). */
+#define BATCH_BUFFER SRV__STREAM_CHUNK
+
+typedef struct runner {
+  srv_job job; /* first: a job is its runner */
   srv__batch *b;
-  size_t i;
-  api_response ar;
-  struct bitem *next; /* in the batch's list of items done */
-} bitem;
+  int in_pool;
+  char *text; /* the line being made, reused from item to item */
+  size_t len, cap;
+} runner;
+
+/* A line that is a stream (an answer larger than --stream-above). */
+typedef struct sline {
+  api_stream *s;
+  long held;
+  struct sline *next;
+} sline;
 
 struct srv__batch {
   pthread_mutex_t mu;
@@ -40,16 +64,20 @@ struct srv__batch {
   char key[SRV_CLIENT_KEY];
   atomic_int fd;   /* of the connection; -1 once it has completed */
   atomic_int gone; /* the client went away: no more items */
-  size_t n, next;  /* items, and the next one to send to the pool */
-  size_t in_flight, in_pool;
+  size_t n, next;  /* items, and the next one to compute */
+  runner *run;     /* batch_parallel of them */
+  unsigned n_run, in_pool;
   size_t ok, failed;
-  bitem *ready, *ready_tail; /* done, in the order they were done */
-  api_stream *line;          /* the line being written */
+  int broken; /* a line could not be made: out of memory */
+  char *out;  /* whole lines not yet written */
+  size_t out_len, out_off, out_cap;
+  sline *streams, *streams_tail;
+  api_stream *line; /* the stream line being written */
   long line_held;
   char *last; /* the last line, once every item's line is written */
   size_t last_len, last_off;
   int waiting; /* the connection is suspended until a line is ready */
-  int refs;    /* the response, and each item in the pool */
+  int refs;    /* the response, and each runner in the pool */
   long held;   /* bytes counted against the memory budget */
   double t0;
   size_t sent; /* bytes of the answer written */
@@ -69,12 +97,16 @@ static void batch_free(srv__batch *b) {
   if (b->gz)
     deflateEnd(&b->zs);
   free(b->gz_in);
-  while (b->ready) {
-    bitem *it = b->ready;
-    b->ready = it->next;
-    api_response_free(&it->ar);
-    free(it);
+  while (b->streams) {
+    sline *l = b->streams;
+    b->streams = l->next;
+    api_stream_free(l->s);
+    free(l);
   }
+  for (unsigned k = 0; k < b->n_run; k++)
+    free(b->run[k].text);
+  free(b->run);
+  free(b->out);
   api_stream_free(b->line);
   free(b->last);
   api_batch_free(b->ab);
@@ -87,55 +119,193 @@ static int batch_gone(srv__batch *b) {
   return atomic_load(&b->gone) || srv__peer_closed(atomic_load(&b->fd));
 }
 
-static int item_gone(srv_job *j) { return batch_gone(((bitem *)j)->b); }
+static int runner_gone(srv_job *j) { return batch_gone(((runner *)j)->b); }
 
-/* An item's answer is in: to the list of lines to write (under b->mu). */
-static void item_ready(srv__batch *b, bitem *it) {
-  it->next = NULL;
-  if (b->ready_tail)
-    b->ready_tail->next = it;
-  else
-    b->ready = it;
-  b->ready_tail = it;
+/* Lines are waiting to be written (under b->mu). */
+static int lines_held(const srv__batch *b) {
+  return b->out_len > b->out_off || b->streams || b->line;
 }
 
-static void item_run(srv_job *j) {
-  bitem *it = (bitem *)j;
-  srv__batch *b = it->b;
-  struct srv_daemon *d = b->d;
-  if (srv__over_budget(d, b->key)) {
-    srv__budget_problem(d, b->key, &it->ar);
-  } else {
-    api_server_info info = srv__server_info(d, &it->job);
-    api_batch_run(b->ab, it->i, &d->cfg.lim, &info, &it->ar);
+/* The bytes of the buffer already written given back, once they are as
+ * many as those left (so that a buffer its reader never empties does not
+ * grow, and each byte is moved at most once on average). */
+static void out_compact(srv__batch *b) {
+  if (b->out_off == 0 || b->out_off < b->out_len - b->out_off)
+    return;
+  memmove(b->out, b->out + b->out_off, b->out_len - b->out_off);
+  batch_hold(b, -(long)b->out_off);
+  b->out_len -= b->out_off;
+  b->out_off = 0;
+}
+
+/* Append @a len bytes of whole lines to the buffer (under b->mu); 0, or -1
+ * when out of memory. */
+static int out_put(srv__batch *b, const char *text, size_t len) {
+  out_compact(b);
+  if (b->out_len + len > b->out_cap) {
+    /* at once the room a full buffer needs with a line beyond it */
+    size_t cap = b->out_cap ? 2 * b->out_cap : BATCH_BUFFER + BATCH_BUFFER / 2;
+    while (cap < b->out_len + len)
+      cap *= 2;
+    char *p = realloc(b->out, cap);
+    if (!p)
+      return -1;
+    b->out = p;
+    b->out_cap = cap;
   }
-  pthread_mutex_lock(&b->mu);
-  batch_hold(b, (long)it->ar.held);
-  pthread_mutex_unlock(&b->mu);
+  memcpy(b->out + b->out_len, text, len);
+  b->out_len += len;
+  batch_hold(b, (long)len);
+  return 0;
+}
+
+/* The line of item @a i, whose answer is @a ar (consumed), appended to
+ * text (*buf, *len, *cap), or as a stream into *s when the answer is one;
+ * 0, or -1 when out of memory. */
+static int line_of(srv__batch *b, size_t i, api_response *ar, char **buf,
+                   size_t *len, size_t *cap, api_stream **s, size_t *held) {
+  *s = NULL;
+  int put = api_batch_line_put(b->ab, i, ar, buf, len, cap);
+  if (put == 0 && !(*s = api_batch_line(b->ab, i, ar, held)))
+    return -1;
+  return put < 0 ? -1 : 0;
+}
+
+/* Item @a i's line is made (under b->mu): counted, and the stream @a s, if
+ * any, queued; @a rc -1: it could not be made. */
+static void line_made(srv__batch *b, size_t i, int status, int rc,
+                      api_stream *s, size_t held) {
+  if (status == 200)
+    b->ok++;
+  else
+    b->failed++;
+  srv_metrics_batch_item(b->d->metrics, api_batch_endpoint(b->ab, i), status);
+  if (rc < 0) {
+    b->broken = 1;
+    return;
+  }
+  if (!s)
+    return;
+  sline *l = malloc(sizeof *l);
+  if (!l) {
+    api_stream_free(s);
+    b->broken = 1;
+    return;
+  }
+  *l = (sline){s, (long)held, NULL};
+  if (b->streams_tail)
+    b->streams_tail->next = l;
+  else
+    b->streams = l;
+  b->streams_tail = l;
+  batch_hold(b, (long)held);
+}
+
+/* The next item answered at once with @a ar, without the pool (under
+ * b->mu). */
+static void item_now(srv__batch *b, api_response *ar) {
+  out_compact(b);
+  size_t i = b->next++, before = b->out_len, held = 0;
+  int status = ar->status;
+  api_stream *s;
+  int rc = line_of(b, i, ar, &b->out, &b->out_len, &b->out_cap, &s, &held);
+  batch_hold(b, (long)(b->out_len - before));
+  line_made(b, i, status, rc, s, held);
+}
+
+static void item_problem(srv__batch *b, api_problem_kind kind,
+                         const char *detail) {
+  api_response ar;
+  api_problem(&ar, kind, detail, NULL, NULL, 0);
+  item_now(b, &ar);
+}
+
+/* The next item for runner @a ru into *i (under b->mu): 1 to compute it,
+ * 2 to answer it with the budget's 503, 0 to end the run. */
+static int claim(srv__batch *b, runner *ru, size_t *i) {
+  struct srv_daemon *d = b->d;
+  if (atomic_load(&b->gone) || atomic_load(&ru->job.cancel) ||
+      atomic_load(&d->draining) || b->broken || b->next == b->n ||
+      b->out_len - b->out_off >= BATCH_BUFFER)
+    return 0;
+  int rc = 1;
+  if (srv__over_budget(d, b->key)) {
+    /* the lines held, or another runner's, will give bytes back */
+    if (lines_held(b) || b->in_pool > 1)
+      return 0;
+    rc = 2;
+  }
+  *i = b->next++;
+  return rc;
+}
+
+/* A run: the batch's next items, one after another, each line into the
+ * batch's buffer, until the slice is used up or no item may be taken. */
+static void runner_run(srv_job *j) {
+  runner *ru = (runner *)j;
+  srv__batch *b = ru->b;
+  struct srv_daemon *d = b->d;
+  api_server_info info = srv__server_info(d, j);
+  double t0 = srv__now();
+  int woke = 0;
+  for (;;) {
+    size_t i;
+    pthread_mutex_lock(&b->mu);
+    int what = claim(b, ru, &i);
+    pthread_mutex_unlock(&b->mu);
+    if (!what)
+      break;
+    api_response ar;
+    if (what == 2)
+      srv__budget_problem(d, b->key, &ar);
+    else
+      api_batch_run(b->ab, i, &d->cfg.lim, &info, &ar);
+    int status = ar.status;
+    size_t held = 0;
+    api_stream *s;
+    ru->len = 0;
+    int rc = line_of(b, i, &ar, &ru->text, &ru->len, &ru->cap, &s, &held);
+    pthread_mutex_lock(&b->mu);
+    if (rc == 0 && ru->len)
+      rc = out_put(b, ru->text, ru->len);
+    line_made(b, i, status, rc, s, held);
+    if (!woke && b->waiting && b->c) {
+      /* the first line of the run goes out while the next item computes
+       * (which may be long); the others at the run's end */
+      b->waiting = 0;
+      woke = 1;
+      MHD_resume_connection(b->c);
+    }
+    pthread_mutex_unlock(&b->mu);
+    if (ru->cap > BATCH_BUFFER) { /* a large line: its room not kept */
+      free(ru->text);
+      ru->text = NULL;
+      ru->cap = 0;
+    }
+    if (srv__now() - t0 > RUN_SLICE)
+      break;
+  }
 }
 
 static void dispatch(srv__batch *b);
 
-static void item_done(srv_job *j) {
-  bitem *it = (bitem *)j;
-  srv__batch *b = it->b;
+/* A run is over: more runs while items are left and the buffer has room;
+ * the I/O thread woken for the lines written. */
+static void runner_done(srv_job *j) {
+  runner *ru = (runner *)j;
+  srv__batch *b = ru->b;
   pthread_mutex_lock(&b->mu);
+  ru->in_pool = 0;
   b->in_pool--;
   b->refs--;
   if (j->state == SRV_JOB_CANCELLED && batch_gone(b)) {
     atomic_store(&b->gone, 1);
     srv_metrics_cancelled(b->d->metrics);
-    batch_hold(b, -(long)it->ar.held);
-    api_response_free(&it->ar);
-    free(it);
-    b->in_flight--;
   } else {
-    if (j->state == SRV_JOB_REFUSED)
-      api_problem(&it->ar, API_P_SHUTTING_DOWN,
-                  "the server is shutting down; retry on another replica or "
-                  "later",
-                  NULL, NULL, 0);
-    item_ready(b, it);
+    if (j->state == SRV_JOB_REFUSED && b->next < b->n)
+      item_problem(b, API_P_SHUTTING_DOWN,
+                   "the server is shutting down; retry on another replica or "
+                   "later");
     dispatch(b);
   }
   if (b->waiting && b->c) {
@@ -148,100 +318,75 @@ static void item_done(srv_job *j) {
     batch_free(b);
 }
 
-static const srv_job_ops ITEM_JOB = {NULL, item_run, item_done, item_gone};
+static const srv_job_ops RUNNER_JOB = {NULL, runner_run, runner_done,
+                                       runner_gone};
 
-/* An item answered at once, without the pool (under b->mu). */
-static void item_now(srv__batch *b, bitem *it, api_problem_kind kind,
-                     const char *detail) {
-  api_problem(&it->ar, kind, detail, NULL, NULL, 0);
-  item_ready(b, it);
-}
-
-/* Send items to the pool while fewer than batch_parallel are in flight
- * (under b->mu).  When the client's queue is full or the memory budget (or
- * the client's share of it) is spent, wait for an item in flight to finish;
- * with none in flight, the item is answered 503 as a request would be. */
+/* Send idle runners to the pool while items are left and the buffer has
+ * room (under b->mu).  When the client's queue is full or the memory
+ * budget (or the client's share of it) is spent, wait for a runner or the
+ * lines held; with neither, the next item is answered 503 as a request
+ * would be. */
 static void dispatch(srv__batch *b) {
   struct srv_daemon *d = b->d;
-  while (!atomic_load(&b->gone) && b->next < b->n &&
-         b->in_flight < d->cfg.batch_parallel) {
-    bitem *it = calloc(1, sizeof *it);
-    if (!it)
-      return; /* a line written or an item done will try again */
-    it->b = b;
-    it->i = b->next;
-    it->job.ops = &ITEM_JOB;
-    int rc;
+  while (!atomic_load(&b->gone) && !b->broken && b->next < b->n &&
+         b->out_len - b->out_off < BATCH_BUFFER) {
     if (atomic_load(&d->draining)) {
-      item_now(b, it, API_P_SHUTTING_DOWN, "the server is shutting down");
-    } else if (srv__over_budget(d, b->key)) {
-      if (b->in_flight > 0) {
-        free(it);
+      item_problem(b, API_P_SHUTTING_DOWN, "the server is shutting down");
+      continue;
+    }
+    runner *ru = NULL;
+    for (unsigned k = 0; k < b->n_run && !ru; k++)
+      if (!b->run[k].in_pool)
+        ru = &b->run[k];
+    if (!ru)
+      return;
+    int busy = lines_held(b) || b->in_pool > 0, rc;
+    if (srv__over_budget(d, b->key)) {
+      if (busy)
         return;
-      }
-      srv__budget_problem(d, b->key, &it->ar);
-      item_ready(b, it);
-    } else if ((rc = srv_pool_submit(d->pool, &it->job, b->key)) != 0) {
-      if (rc == SRV_POOL_FULL && b->in_flight > 0) {
-        free(it);
+      api_response ar;
+      srv__budget_problem(d, b->key, &ar);
+      item_now(b, &ar);
+    } else if ((rc = srv_pool_submit(d->pool, &ru->job, b->key)) != 0) {
+      if (rc == SRV_POOL_FULL && busy)
         return;
-      }
       if (rc == SRV_POOL_FULL)
         srv_metrics_busy(d->metrics);
-      item_now(b, it,
-               rc == SRV_POOL_FULL    ? API_P_OVERLOADED
-               : rc == SRV_POOL_NOMEM ? API_P_OUT_OF_MEMORY
-                                      : API_P_SHUTTING_DOWN,
-               rc == SRV_POOL_FULL ? "this client's queue is full; retry "
-                                     "the item after a second"
-                                   : "the item could not be queued");
+      item_problem(b,
+                   rc == SRV_POOL_FULL    ? API_P_OVERLOADED
+                   : rc == SRV_POOL_NOMEM ? API_P_OUT_OF_MEMORY
+                                          : API_P_SHUTTING_DOWN,
+                   rc == SRV_POOL_FULL ? "this client's queue is full; retry "
+                                         "the item after a second"
+                                       : "the item could not be queued");
     } else {
+      ru->in_pool = 1;
       b->in_pool++;
       b->refs++;
     }
-    b->next++;
-    b->in_flight++;
   }
 }
 
-/* The next line to write, into b->line or b->last (under b->mu); 0 when
- * there is none yet, -1 when out of memory. */
-static int next_line(srv__batch *b) {
-  if (b->ready) {
-    bitem *it = b->ready;
-    if (!(b->ready = it->next))
-      b->ready_tail = NULL;
-    if (it->ar.status == 200)
-      b->ok++;
-    else
-      b->failed++;
-    srv_metrics_batch_item(b->d->metrics, api_batch_endpoint(b->ab, it->i),
-                           it->ar.status);
-    size_t held;
-    long answer = (long)it->ar.held;
-    b->line = api_batch_line(b->ab, it->i, &it->ar, &held);
-    free(it);
-    batch_hold(b, (long)held - answer);
-    b->line_held = (long)held;
-    return b->line ? 1 : -1;
-  }
-  if (b->next == b->n && b->in_flight == 0 && !b->last) {
-    api_response done;
-    api_batch_done(b->ok, b->failed, srv__now() - b->t0, &done);
-    b->last = done.body;
-    b->last_len = done.len;
-    return b->last ? 1 : -1;
-  }
-  return 0;
+/* The last line, once every item's line is written (under b->mu); 0 when
+ * it is not time yet, -1 when out of memory. */
+static int last_line(srv__batch *b) {
+  if (b->next < b->n || b->in_pool > 0 || lines_held(b) || b->last)
+    return 0;
+  api_response done;
+  api_batch_done(b->ok, b->failed, srv__now() - b->t0, &done);
+  b->last = done.body;
+  b->last_len = done.len;
+  return b->last ? 1 : -1;
 }
 
-/* The reader of a batch's response, on the I/O thread. */
+/* The reader of a batch's response, on the I/O thread: the stream line
+ * begun, the buffer's lines, the next stream line, the last line. */
 static ssize_t batch_read(void *cls, uint64_t pos, char *buf, size_t max) {
   srv__batch *b = cls;
   size_t got = 0;
   (void)pos;
   pthread_mutex_lock(&b->mu);
-  if (atomic_load(&b->gone)) {
+  if (atomic_load(&b->gone) || b->broken) {
     pthread_mutex_unlock(&b->mu);
     return MHD_CONTENT_READER_END_WITH_ERROR;
   }
@@ -256,7 +401,27 @@ static ssize_t batch_read(void *cls, uint64_t pos, char *buf, size_t max) {
       api_stream_free(b->line);
       b->line = NULL;
       batch_hold(b, -b->line_held);
-      b->in_flight--;
+      continue;
+    }
+    if (b->out_off < b->out_len) {
+      size_t k = b->out_len - b->out_off;
+      k = k < max - got ? k : max - got;
+      memcpy(buf + got, b->out + b->out_off, k);
+      b->out_off += k;
+      got += k;
+      if (b->out_off == b->out_len) {
+        batch_hold(b, -(long)b->out_len);
+        b->out_off = b->out_len = 0;
+      }
+      continue;
+    }
+    if (b->streams) {
+      sline *l = b->streams;
+      if (!(b->streams = l->next))
+        b->streams_tail = NULL;
+      b->line = l->s;
+      b->line_held = l->held;
+      free(l);
       continue;
     }
     if (b->last) {
@@ -268,8 +433,10 @@ static ssize_t batch_read(void *cls, uint64_t pos, char *buf, size_t max) {
       break;
     }
     dispatch(b);
-    int rc = next_line(b);
-    if (rc < 0) {
+    if (lines_held(b))
+      continue; /* answered at once by dispatch */
+    int rc = last_line(b);
+    if (rc < 0 || b->broken) {
       pthread_mutex_unlock(&b->mu);
       return MHD_CONTENT_READER_END_WITH_ERROR;
     }
@@ -281,7 +448,7 @@ static ssize_t batch_read(void *cls, uint64_t pos, char *buf, size_t max) {
   if (got == 0 && b->last)
     ret = MHD_CONTENT_READER_END_OF_STREAM;
   else if (got == 0) {
-    /* nothing to write until an item is done: item_done resumes */
+    /* nothing to write until a run ends: runner_done resumes */
     b->waiting = 1;
     MHD_suspend_connection(b->c);
   }
@@ -383,6 +550,19 @@ enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
   b->n = api_batch_size(ab);
   snprintf(b->key, sizeof b->key, "%s", r->key);
   atomic_store(&b->fd, r->cn ? r->cn->fd : -1);
+  b->n_run =
+      d->cfg.batch_parallel < b->n ? d->cfg.batch_parallel : (unsigned)b->n;
+  if (!(b->run = calloc(b->n_run, sizeof *b->run))) {
+    pthread_mutex_destroy(&b->mu);
+    free(b);
+    api_batch_free(ab);
+    return srv__send_problem(c, r, API_P_OUT_OF_MEMORY, "out of memory", NULL,
+                             0, NULL);
+  }
+  for (unsigned k = 0; k < b->n_run; k++) {
+    b->run[k].job.ops = &RUNNER_JOB;
+    b->run[k].b = b;
+  }
   b->refs = 1; /* the response */
   b->t0 = r->t0;
   if (r->gzip && (b->gz_in = malloc(SRV__STREAM_CHUNK)) &&

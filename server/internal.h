@@ -122,7 +122,8 @@ typedef struct srv__req {
   int answered; /* the pool handed the request back with r->ar */
   char *buf;
   size_t len, cap;
-  int raw; /* answered on the socket (srv__send_raw_problem) */
+  size_t expect; /* the body's Content-Length, 0 when not told */
+  int raw;       /* answered on the socket (srv__send_raw_problem) */
   const char *accept_encoding; /* Accept-Encoding of a 415, or NULL */
   int over_budget; /* the body came while the memory budget was spent */
   long held;       /* bytes of body and answer counted against the budget */

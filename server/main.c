@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <netdb.h>
 #include <jansson.h>
+#include <malloc.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
@@ -505,6 +506,14 @@ int main(int argc, char **argv) {
    * main thread waits for. */
   ss_gsl_quiet();
   json_object_seed(0);
+  /* One malloc arena for every thread: an answer is made on a worker and
+   * freed on the I/O thread, and with an arena per thread (glibc makes up
+   * to 8 per core) each one kept its own high-water mark of them: 1000
+   * clients that did not read their /batch answers peaked at 170 MB of
+   * RSS, 135 MB with one arena (bench/rss.py).  The small blocks a request
+   * makes and frees come from each thread's cache, without the arena's
+   * lock. */
+  mallopt(M_ARENA_MAX, 1);
   signal(SIGPIPE, SIG_IGN);
   sigset_t set;
   sigemptyset(&set);

@@ -14,10 +14,22 @@
  * (headers and body) within request_timeout of their start or of the end
  * of their previous request: libmicrohttpd's own timeout counts idle time
  * only, which a byte every few seconds resets.
+ *
+ * And it gives the heap back.  Answers held for clients that read slowly
+ * are freed in any order, and glibc's malloc keeps freed memory for reuse
+ * (in every arena a thread has used): after 256 clients left their /batch
+ * answers unread the daemon stayed at 74-113 MB of RSS against 9 MB idle.
+ * So once the bytes held against the memory budget have fallen TRIM_STEP
+ * below their high mark since the last trim, and when they are back to 0
+ * from a mark of TRIM_IDLE or more (not after every small answer),
+ * malloc_trim returns the free pages of every arena to the
+ * system (a few milliseconds at a few hundred megabytes, here on the
+ * monitor's thread).
  */
 #define _GNU_SOURCE
 #include <arpa/inet.h>
 #include <errno.h>
+#include <malloc.h>
 #include <netinet/in.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -28,6 +40,8 @@
 #include "internal.h"
 
 #define MONITOR_MS 20
+#define TRIM_STEP (32L << 20)
+#define TRIM_IDLE (1L << 20)
 
 /* ---- the connections ----------------------------------------------------- */
 
@@ -162,12 +176,26 @@ static void reap_slow(struct srv_daemon *d) {
   pthread_mutex_unlock(&d->mu);
 }
 
+/* The heap given back after a burst: @a high is the most the budget held
+ * since the last trim. */
+static void trim(struct srv_daemon *d, long *high) {
+  long now = srv_metrics_held(d->metrics, 0);
+  if (now > *high)
+    *high = now;
+  if (*high - now >= TRIM_STEP || (now == 0 && *high >= TRIM_IDLE)) {
+    malloc_trim(0);
+    *high = now;
+  }
+}
+
 void *srv__monitor(void *arg) {
   struct srv_daemon *d = arg;
   struct timespec ts = {0, MONITOR_MS * 1000000L};
+  long high = 0;
   while (!atomic_load(&d->monitor_stop)) {
     srv_pool_watch(d->pool);
     reap_slow(d);
+    trim(d, &high);
     nanosleep(&ts, NULL);
   }
   return NULL;

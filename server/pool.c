@@ -143,13 +143,17 @@ static void *worker(void *arg) {
     client *c = j->owner;
     c->running -= 1 + j->extra;
     p->running -= 1 + j->extra;
+    /* The slot this job held is this thread's again: it takes the next job
+     * itself, so no other thread need wake, unless the job had borrowed
+     * threads, whose slots are free now too. */
+    if (j->extra)
+      pthread_cond_broadcast(&p->work);
     j->extra = 0;
     client_release(p, c);
     all_unlink(p, j);
     j->state = atomic_load(&j->cancel) ? SRV_JOB_CANCELLED : SRV_JOB_DONE;
-    /* another of this client's jobs may now run */
-    pthread_cond_broadcast(&p->work);
-    pthread_cond_broadcast(&p->idle);
+    if (!p->all)
+      pthread_cond_broadcast(&p->idle); /* srv_pool_wait_idle */
     pthread_mutex_unlock(&p->mu);
     j->ops->done(j); /* the job's owner may free it from here on */
     pthread_mutex_lock(&p->mu);
@@ -290,6 +294,13 @@ void srv_pool_load(srv_pool *p, srv_pool_load_t *out) {
   out->waiting = p->waiting;
   out->clients = clients;
   pthread_mutex_unlock(&p->mu);
+}
+
+int srv_pool_idle(srv_pool *p) {
+  pthread_mutex_lock(&p->mu);
+  int idle = p->waiting == 0 && p->running < p->n_threads;
+  pthread_mutex_unlock(&p->mu);
+  return idle;
 }
 
 void srv_pool_drain(srv_pool *p) { drop_waiting(p, 1, SRV_JOB_REFUSED); }

@@ -18,10 +18,12 @@
  * round robin, a bounded queue per client, at most client_workers running
  * per client), and resumed with its answer by the worker that computed it.
  * What needs no computing (the api's inline endpoints, and every refusal)
- * is answered on the I/O thread at once.  POST /batch is batch.c's: its
- * body is parsed in the pool too, and its answer started when the request
- * is resumed.  Nothing whose work grows with the body runs on the I/O
- * thread, which only collects the bytes.
+ * is answered on the I/O thread at once, and so is a computation the api
+ * calls small and bounded (an /orbit from a guess) when it is the only
+ * request in flight and the pool idles (answer_small).  POST /batch is
+ * batch.c's: its body is parsed in the pool too, and its answer started when
+ * the request is resumed.  Nothing whose work grows with the body runs on the
+ * I/O thread, which only collects the bytes.
  *
  * Completion.  Metrics, one line of access log, and the connection's
  * deadline for its next request.
@@ -328,6 +330,7 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
     const char *name;
     if (errno == ERANGE || n > body_limit(d, r, &name))
       return too_large(d, c, r);
+    r->expect = (size_t)n;
   }
   return MHD_YES;
 }
@@ -354,19 +357,24 @@ static enum MHD_Result take_body(struct srv_daemon *d, srv__req *r,
     return MHD_YES;
   }
   if (r->len + n + 1 > r->cap) {
+    /* room for the whole body at once when its length was told (it is
+     * within the limit), else twice as much as needed; the room is what
+     * the budget counts */
     size_t cap = r->cap ? r->cap : 4096;
+    if (r->expect >= r->len + n)
+      cap = r->expect + 1;
     while (cap < r->len + n + 1)
       cap *= 2;
     char *b = realloc(r->buf, cap);
     if (!b)
       return MHD_NO;
     r->buf = b;
+    srv__hold(d, r, (long)(cap - r->cap));
     r->cap = cap;
   }
   memcpy(r->buf + r->len, data, n);
   r->len += n;
   r->buf[r->len] = 0;
-  srv__hold(d, r, (long)n);
   return MHD_YES;
 }
 
@@ -416,7 +424,7 @@ static void job_run(srv_job *j) {
   /* the body is no longer needed: give its bytes back now */
   free(r->buf);
   r->buf = NULL;
-  srv__hold(r->d, r, -(long)r->len);
+  srv__hold(r->d, r, -(long)r->cap);
   r->len = r->cap = 0;
 }
 
@@ -468,11 +476,43 @@ enum MHD_Result srv__submit(struct srv_daemon *d, struct MHD_Connection *c,
       "the computation could not be queued", NULL, 0, NULL);
 }
 
+/* A body no larger than this may be answered on the I/O thread. */
+#define SMALL_BODY 2048
+
+/* Answer @a r at once, on the I/O thread, when its work is small and
+ * bounded (the api says: an /orbit from a guess, about 10 us), it is the
+ * only request in flight and the pool is idle, so that it takes no turn
+ * from queued work: a hand-off to a worker and back (two thread wake-ups,
+ * a suspended connection resumed) costs several times such a computation.
+ * With other requests in flight the pool's workers compute beside the I/O
+ * thread, which alone would hold the throughput to one core.  0 when it is
+ * not answered here. */
+static int answer_small(struct srv_daemon *d, struct MHD_Connection *c,
+                        srv__req *r, enum MHD_Result *ok) {
+  if (r->len > SMALL_BODY || r->async ||
+      api_endpoint_at(r->ep)->run_class != API_RUN_COMPUTE ||
+      srv_metrics_in_flight(d->metrics, 0) > 1 || !srv_pool_idle(d->pool))
+    return 0;
+  api_response ar;
+  api_server_info info = srv__server_info(d, &r->job);
+  info.small_only = 1;
+  /* not a job of the pool: no threads to borrow, nothing to cancel */
+  info.threads = NULL;
+  info.cancelled = NULL;
+  if (api_handle(r->ep, r->buf ? r->buf : "", r->len, &d->cfg.lim, &info,
+                 &ar) == 0)
+    return 0;
+  *ok = srv__send_api(c, r, &ar, NULL);
+  return 1;
+}
+
 /* The body of a computation is in: refused at once while the daemon shuts
  * down or the memory budget (or the client's share of it) is spent; else it
- * goes to the pool (a batch's body to be parsed there). */
+ * is answered at once when small, or goes to the pool (a batch's body to be
+ * parsed there). */
 static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
                                srv__req *r) {
+  enum MHD_Result ok;
   if (atomic_load(&d->draining))
     return srv__send_problem(c, r, API_P_SHUTTING_DOWN,
                              "the server is shutting down", NULL, 0, NULL);
@@ -481,6 +521,8 @@ static enum MHD_Result compute(struct srv_daemon *d, struct MHD_Connection *c,
     srv__budget_problem(d, r->key, &ar);
     return srv__send_api(c, r, &ar, NULL);
   }
+  if (answer_small(d, c, r, &ok))
+    return ok;
   return srv__submit(d, c, r);
 }
 

@@ -124,6 +124,9 @@ typedef struct srv_pool_load_t {
   unsigned clients; /* clients with a job waiting or running */
 } srv_pool_load_t;
 void srv_pool_load(srv_pool *p, srv_pool_load_t *out);
+/* Whether a worker is free and no job waits: work done elsewhere now (on
+ * the I/O thread) then takes no turn from a job queued. */
+int srv_pool_idle(srv_pool *p);
 /* Drop every waiting job (done() with SRV_JOB_REFUSED). */
 void srv_pool_drain(srv_pool *p);
 /* Flag every job to stop. */

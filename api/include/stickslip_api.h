@@ -131,12 +131,18 @@ typedef struct api_server_info {
    *  computations until the request ends.  NULL: @a want. */
   unsigned (*threads)(void *cls, unsigned want);
   void *threads_cls;
+  /** Serve a computing request only when its work is small and bounded,
+   *  microseconds whatever its numbers (an /orbit from a guess without
+   *  samples, a /stability); any other is left: api_handle answers status
+   *  0, @a out empty, for the server to run where long work runs. */
+  int small_only;
 } api_server_info;
 
 /**
  * Serve endpoint @a index: for API_RUN_COMPUTE, parse, validate, compute and
  * encode @a body; for API_RUN_INLINE, @a body is ignored.  Always fills
- * @a out (a result or a problem); returns out->status.  @a srv may be NULL
+ * @a out (a result or a problem), unless @a srv->small_only leaves the
+ * request (status 0); returns out->status.  @a srv may be NULL
  * (the meta endpoints then report what they can).  Thread-safe.
  */
 int api_handle(size_t index, const char *body, size_t len,
@@ -181,6 +187,14 @@ int api_batch_run(api_batch *b, size_t i, const api_limits *lim,
  *  memory. */
 api_stream *api_batch_line(const api_batch *b, size_t i, api_response *item,
                            size_t *held);
+/** The same line appended to the text *buf (*len bytes of *cap allocated,
+ *  grown with realloc; the caller frees it), for an answer @a item that is
+ *  a body: no stream, no allocation of its own.  1 appended (@a item
+ *  consumed); 0 when @a item is a stream (left as it is, for
+ *  api_batch_line); -1 when out of memory (@a item consumed, *len as it
+ *  was). */
+int api_batch_line_put(const api_batch *b, size_t i, api_response *item,
+                       char **buf, size_t *len, size_t *cap);
 /** The last line (a body, malloc'd, in @a out). */
 void api_batch_done(size_t ok, size_t failed, double seconds,
                     api_response *out);

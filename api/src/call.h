@@ -18,6 +18,9 @@ typedef struct api_call {
   const api_server_info *srv; /* may be NULL */
   api_err *e;
   api_lazies *lazy; /* the answer's lazy arrays (writer.c) */
+  /* may be NULL; set to 1 by a decode whose work is small and bounded
+   * (api_server_info.small_only) */
+  int *small;
 } api_call;
 
 /* The threads a /map or a /basins runs on: --map-threads, no more than the

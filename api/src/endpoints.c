@@ -137,7 +137,8 @@ int api__handle(size_t index, const char *body, size_t len,
                 api_response *out, const char *prefix) {
   api_err e;
   api_lazies lz = {NULL, 0, 0, 0};
-  api_call c = {lim, srv, &e, &lz};
+  int small = 0;
+  api_call c = {lim, srv, &e, &lz, &small};
   json_t *root = NULL;
   void *x = NULL;
   memset(&e, 0, sizeof e);
@@ -154,9 +155,16 @@ int api__handle(size_t index, const char *body, size_t len,
     return out->status;
   }
   double t0 = now();
-  if (ep->decode(root, &c, &x) == 0 && ep->run(x, &c) == 0 &&
-      ep->encode(x, &c, out) == 0 && ep->pub.run_class == API_RUN_COMPUTE &&
-      lim->max_seconds > 0 && now() - t0 > lim->max_seconds)
+  int decoded = ep->decode(root, &c, &x) == 0;
+  if (decoded && srv && srv->small_only &&
+      ep->pub.run_class == API_RUN_COMPUTE && !small) {
+    ep->release(x); /* left to the server: out->status 0 */
+    json_decref(root);
+    return 0;
+  }
+  if (decoded && ep->run(x, &c) == 0 && ep->encode(x, &c, out) == 0 &&
+      ep->pub.run_class == API_RUN_COMPUTE && lim->max_seconds > 0 &&
+      now() - t0 > lim->max_seconds)
     /* the compute-time limit covers the encoding of the answer too */
     api__limit(&e, "max_seconds", lim->max_seconds, "",
                "computing and encoding the answer took %.3g s, over the "

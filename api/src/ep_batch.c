@@ -255,22 +255,58 @@ static int ndjson_as_array(api_response *r) {
   return 1;
 }
 
+/* The head of item @a i's line, whose answer is @a item, into @a head (of
+ * room for an id and 64 bytes more), its length the return; *tail: what
+ * ends the line after the body. */
+static size_t line_head(const api_batch *b, size_t i, api_response *item,
+                        char *head, size_t n, const char **tail) {
+  const char *id = b->items[i].id ? b->items[i].id : "null";
+  int lines = ndjson_as_array(item);
+  int k =
+      snprintf(head, n, "{\"id\":%s,\"index\":%zu,\"status\":%d,\"body\":%s",
+               id, i, item->status, lines ? "[" : "");
+  *tail = lines ? "]}\n" : "}\n";
+  return (size_t)k;
+}
+
+static size_t head_room(const api_batch *b, size_t i) {
+  return (b->items[i].id ? strlen(b->items[i].id) : 4) + 64;
+}
+
 api_stream *api_batch_line(const api_batch *b, size_t i, api_response *item,
                            size_t *held) {
-  const char *id = b->items[i].id ? b->items[i].id : "null";
-  size_t n = strlen(id) + 64;
+  size_t n = head_room(b, i);
   char *head = malloc(n);
   if (!head) {
     api_response_free(item);
     return NULL;
   }
-  int lines = ndjson_as_array(item);
-  int k =
-      snprintf(head, n, "{\"id\":%s,\"index\":%zu,\"status\":%d,\"body\":%s",
-               id, i, item->status, lines ? "[" : "");
-  const char *tail = lines ? "]}\n" : "}\n";
-  *held = (size_t)k + strlen(tail) + item->held;
-  return api__stream_wrap(head, (size_t)k, item, tail);
+  const char *tail;
+  size_t k = line_head(b, i, item, head, n, &tail);
+  *held = k + strlen(tail) + item->held;
+  return api__stream_wrap(head, k, item, tail);
+}
+
+int api_batch_line_put(const api_batch *b, size_t i, api_response *item,
+                       char **buf, size_t *len, size_t *cap) {
+  if (item->stream)
+    return 0;
+  api_wbuf w = {*buf, *len, *cap, 0};
+  const char *tail;
+  size_t n = head_room(b, i);
+  api__w_room(&w, n + item->len + 4);
+  if (!w.oom) {
+    w.len += line_head(b, i, item, w.p + w.len, n, &tail);
+    api__w_put(&w, item->body ? item->body : "", item->len);
+    api__w_put(&w, tail, strlen(tail));
+  }
+  api_response_free(item);
+  *buf = w.p;
+  *cap = w.cap;
+  if (w.oom)
+    return -1;
+  *len = w.len;
+  return 1;
 }
 
 void api_batch_done(size_t ok, size_t failed, double seconds,
@@ -332,8 +368,9 @@ static int serve_line(api_batch *b, size_t i, const api_call *c, api_wbuf *w) {
   api_response r;
   size_t held;
   int status = api_batch_run(b, i, c->lim, c->srv, &r);
-  api_stream *line = api_batch_line(b, i, &r, &held);
-  if (!line || drain(w, line) != 0)
+  int put = api_batch_line_put(b, i, &r, &w->p, &w->len, &w->cap);
+  api_stream *line = put == 0 ? api_batch_line(b, i, &r, &held) : NULL;
+  if (put < 0 || (put == 0 && (!line || drain(w, line) != 0)))
     return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL,
                      "the answer could not be written: out of memory");
   return status;

@@ -120,6 +120,19 @@ static void cancel_hook(ss_orbit_opts *o, const api_call *c) {
   }
 }
 
+/* Whether the work is small and bounded (api_server_info.small_only): a
+ * Newton solve from a guess (its iterations capped) with no samples, whose
+ * phases' events are found over at most SMALL_TIME (about a hundred periods
+ * of the paper's orbit), at ten microseconds or so. */
+#define SMALL_TIME 1000.0
+static int is_small(const orbit_x *x) {
+  double total = 0;
+  for (int k = 0; k < x->opts.n_guess; k++)
+    total += x->opts.guess[k];
+  return x->has_guess && !x->samples.has_n && !x->samples.has_tolerance &&
+         total <= SMALL_TIME;
+}
+
 int ep_orbit_decode(const json_t *root, const api_call *c, void **xp) {
   orbit_x *x = api__alloc(sizeof *x, xp, c);
   if (!x)
@@ -138,6 +151,8 @@ int ep_orbit_decode(const json_t *root, const api_call *c, void **xp) {
                      "finds; leave out /guess or /certify");
   to_core(x, c->lim);
   cancel_hook(&x->opts, c);
+  if (c->small)
+    *c->small = is_small(x);
   return api__model(&x->m, &x->ap, c);
 }
 

@@ -36,6 +36,8 @@ static void w_grow(api_wbuf *b, size_t n) {
   b->cap = cap;
 }
 
+void api__w_room(api_wbuf *b, size_t n) { w_grow(b, n); }
+
 void api__w_put(api_wbuf *b, const char *s, size_t n) {
   w_grow(b, n);
   if (b->oom)
@@ -141,9 +143,23 @@ typedef struct cutter {
 
 static void cut(cutter *ct, api_wbuf *b, const api_lazy *l);
 
+/* An integer in decimal, the bytes printf's %lld writes, without its
+ * format parsing. */
+static void w_integer(api_wbuf *b, json_int_t v) {
+  char num[24];
+  size_t k = sizeof num;
+  unsigned long long u =
+      v < 0 ? 0ULL - (unsigned long long)v : (unsigned long long)v;
+  do
+    num[--k] = (char)('0' + u % 10);
+  while ((u /= 10) != 0);
+  if (v < 0)
+    num[--k] = '-';
+  api__w_put(b, num + k, sizeof num - k);
+}
+
 static void w_value(api_wbuf *b, const json_t *j, const api_lazies *lz,
                     cutter *ct) {
-  char num[32];
   const api_lazy *l;
   switch (json_typeof(j)) {
   case JSON_OBJECT: {
@@ -184,9 +200,7 @@ static void w_value(api_wbuf *b, const json_t *j, const api_lazies *lz,
     api__w_str(b, json_string_value(j), json_string_length(j));
     break;
   case JSON_INTEGER:
-    api__w_put(b, num,
-               (size_t)snprintf(num, sizeof num, "%" JSON_INTEGER_FORMAT,
-                                json_integer_value(j)));
+    w_integer(b, json_integer_value(j));
     break;
   case JSON_REAL:
     api__w_real(b, json_real_value(j));

@@ -23,6 +23,8 @@ typedef struct api_wbuf {
 void api__w_put(api_wbuf *b, const char *s, size_t n);
 void api__w_str(api_wbuf *b, const char *s, size_t n);
 void api__w_real(api_wbuf *b, double v);
+/* Room for @a n more bytes (and a NUL) at b->p + b->len, unless b->oom. */
+void api__w_room(api_wbuf *b, size_t n);
 #define API_W_LIT(b, lit) api__w_put(b, lit, sizeof(lit) - 1)
 
 /* A lazy array: n elements, element i written by item() from a, b, k. */
