@@ -132,7 +132,9 @@ typedef struct srv__req {
   const char *etag;             /* a validator for a static answer, or NULL */
   char cors[128];               /* Access-Control-Allow-Origin, or "" */
   char preflight[24];           /* OPTIONS: the methods the path takes */
-  int gzip;                     /* the client accepts gzip */
+  int page;        /* GET /problems/<type>: the page of a problem type */
+  int vary_accept; /* the answer depends on Accept (Vary: Accept) */
+  int gzip;        /* the client accepts gzip */
   char method[8];
   char path[96];
   char key[SRV_CLIENT_KEY]; /* the client, for the pool's queues */
