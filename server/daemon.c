@@ -194,11 +194,10 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
   if (pthread_create(&d->monitor, NULL, srv__monitor, d) == 0)
     d->monitor_running = 1;
   int port = d->port = bound_port(d->mhd, cfg->port);
-  if (strchr(cfg->bind, ':'))
-    fprintf(stderr, "stickslipd listening on http://[%s]:%d\n", cfg->bind,
-            port);
-  else
-    fprintf(stderr, "stickslipd listening on http://%s:%d\n", cfg->bind, port);
+  snprintf(d->url, sizeof d->url,
+           strchr(cfg->bind, ':') ? "http://[%s]:%d" : "http://%s:%d",
+           cfg->bind, port);
+  fprintf(stderr, "stickslipd listening on %s\n", d->url);
   /* after the line that tells the URL, which a supervisor reads first */
   if (!cfg->no_jobs && !d->jobs)
     fprintf(stderr, "stickslipd: out of memory for jobs: none are kept\n");
@@ -215,6 +214,8 @@ int srv_add_connection(struct srv_daemon *d, int fd,
 }
 
 int srv_port(struct srv_daemon *d) { return d->port; }
+
+const char *srv_url(struct srv_daemon *d) { return d->url; }
 
 static void wait_in_flight(struct srv_daemon *d, double until) {
   struct timespec ts = {0, 10 * 1000 * 1000};

@@ -79,7 +79,8 @@ typedef struct srv__conn {
 struct srv_daemon {
   struct MHD_Daemon *mhd;
   srv_config cfg;
-  int port; /* the port it listens on */
+  int port;     /* the port it listens on */
+  char url[96]; /* http://ADDR:PORT/ as it listens */
   srv_metrics *metrics;
   srv_pool *pool;
   char transport[48];

@@ -15,6 +15,7 @@
 #include <sys/time.h>
 #include <unistd.h>
 
+#include "notify.h"
 #include "server.h"
 #include "stickslip.h"
 
@@ -486,6 +487,14 @@ static int configure(srv_config *cfg, int argc, char **argv) {
   return default_store(cfg) ? 2 : 0;
 }
 
+/* Tell the service manager @a state (a unit of Type=notify waits for
+ * READY=1); a failure is said, once per state, and the daemon goes on. */
+static void tell_manager(const char *state) {
+  if (srv_notify(state))
+    fprintf(stderr, "stickslipd: cannot notify NOTIFY_SOCKET %s: %s\n",
+            getenv("NOTIFY_SOCKET"), strerror(errno));
+}
+
 int main(int argc, char **argv) {
   srv_config cfg;
   defaults(&cfg);
@@ -515,12 +524,20 @@ int main(int argc, char **argv) {
   struct srv_daemon *d = srv_start(&cfg);
   if (!d)
     return 1;
+  char state[192];
+  snprintf(state, sizeof state, "READY=1\nSTATUS=serving on %s", srv_url(d));
+  tell_manager(state);
   int sig = 0;
   /* SIGHUP (a terminal closing, a log rotation) does not stop the daemon:
    * its log is its standard error, which it never reopens */
   while (sigwait(&set, &sig) == 0 && sig == SIGHUP)
     fprintf(stderr, "stickslipd: SIGHUP ignored\n");
   fprintf(stderr, "stickslipd: signal %d, draining\n", sig);
+  snprintf(state, sizeof state,
+           "STOPPING=1\nSTATUS=draining on signal %d: the requests in "
+           "flight finish within --drain %g s",
+           sig, cfg.drain);
+  tell_manager(state);
   srv_stop(d);
   fprintf(stderr, "stickslipd: stopped\n");
   return 0;

@@ -193,6 +193,9 @@ unsigned long srv_connections_started(struct srv_daemon *d);
 
 /* The port the daemon listens on (the one the system chose for port 0). */
 int srv_port(struct srv_daemon *d);
+/* The URL it listens on, http://ADDR:PORT ([ADDR] for IPv6), as it
+ * prints it when it is ready. */
+const char *srv_url(struct srv_daemon *d);
 
 /* What the monitor knows of one connection, for diagnosing a stall. */
 typedef struct srv_conn_state {
