@@ -176,7 +176,8 @@ void srv_metrics_jobs(srv_metrics *m, int known, const long by_status[5],
                       long pending);
 char *srv_metrics_render(srv_metrics *m); /* malloc'd */
 
-/** Start the daemon; prints the URL to stderr when ready.  NULL on error. */
+/** Start the daemon; prints the URL to stderr when ready.  NULL on error,
+ *  said on stderr; errno EADDRINUSE when its port is taken. */
 struct srv_daemon;
 struct srv_daemon *srv_start(const srv_config *cfg);
 /** Hand the daemon a connected socket @a fd, as if it had accepted it from

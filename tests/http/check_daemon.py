@@ -7,6 +7,13 @@
               READY=1 with its URL once it answers, and STOPPING=1 on
               SIGTERM before it drains; it exits 0.  A socket nobody
               listens on is said on stderr and the daemon serves on.
+  port_taken  a daemon started on the port of another says so in one line
+              that names the way out (--port N, STICKSLIP_PORT, --port 0),
+              and exits 3, as the man page's EXIT STATUS says.
+  help        every option the daemon parses (each "--..." literal of
+              server/main.c) is in --help and in the man page's OPTIONS,
+              and each of those names only options it parses; the man page
+              has EXAMPLES, EXIT STATUS and FILES.
 
 Usage: check_daemon.py STICKSLIPD CHECK
 """
@@ -20,6 +27,8 @@ import tempfile
 import urllib.request
 
 DAEMON = None
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(
+    os.path.abspath(__file__))))
 
 
 def fail(msg):
@@ -90,7 +99,64 @@ def check_notify():
         print("notify: a socket nobody reads is said, the daemon serves")
 
 
-CHECKS = {"notify": check_notify}
+def check_port_taken():
+    p, url = start(["--port", "0"])
+    port = url.rsplit(":", 1)[1]
+    try:
+        for args, env in ((["--port", port], {}),
+                          ([], {"STICKSLIP_PORT": port})):
+            q = subprocess.run([DAEMON, "--no-jobs"] + args,
+                               env=dict(os.environ, **env),
+                               capture_output=True, text=True, timeout=60)
+            lines = q.stderr.splitlines()
+            if q.returncode != 3 or len(lines) != 1:
+                fail("port taken (%s %s): exit %d, %r" %
+                     (args, env, q.returncode, q.stderr))
+            for way in ("--port N", "STICKSLIP_PORT", "--port 0", port):
+                if way not in lines[0]:
+                    fail("port taken: %r does not name %s" % (lines[0], way))
+            print("port_taken: exit 3, " + lines[0])
+    finally:
+        stop(p)
+    man = open(os.path.join(ROOT, "packaging", "stickslipd.1")).read()
+    status = man.split(".SH EXIT STATUS", 1)[-1].split(".SH", 1)[0]
+    if not re.search(r"^3$", status, re.M) or "taken" not in status:
+        fail("the man page's EXIT STATUS does not give 3 for a port taken")
+
+
+def flags_of_man(man):
+    """The options of the man page's OPTIONS section."""
+    opts = man.split(".SH OPTIONS", 1)[1].split(".SH", 1)[0]
+    return set("--" + f.replace("\\-", "-") for f in
+               re.findall(r"^\\fB\\-\\-([a-z\\-]+)\\fR", opts, re.M))
+
+
+def check_help():
+    src = open(os.path.join(ROOT, "server", "main.c")).read()
+    parsed = set(re.findall(r'"(--[a-z][a-z-]*)"', src))
+    q = subprocess.run([DAEMON, "--help"], capture_output=True, text=True,
+                       timeout=60)
+    if q.returncode != 0:
+        fail("--help exited %d" % q.returncode)
+    helped = set(re.findall(r"^  (--[a-z][a-z-]*)", q.stdout, re.M))
+    man = open(os.path.join(ROOT, "packaging", "stickslipd.1")).read()
+    manned = flags_of_man(man)
+    if len(parsed) < 40:
+        fail("only %d options found in server/main.c" % len(parsed))
+    for name, got in (("--help", helped), ("the man page", manned)):
+        if parsed - got:
+            fail("%s lacks %s" % (name, ", ".join(sorted(parsed - got))))
+        if got - parsed:
+            fail("%s names %s, which the daemon does not parse" %
+                 (name, ", ".join(sorted(got - parsed))))
+    for section in ("EXAMPLES", "EXIT STATUS", "FILES"):
+        if ".SH " + section not in man:
+            fail("the man page has no " + section)
+    print("help: %d options, each in --help and the man page" % len(parsed))
+
+
+CHECKS = {"notify": check_notify, "port_taken": check_port_taken,
+          "help": check_help}
 
 
 def main():
