@@ -6,7 +6,8 @@
 Starts the daemon on a free port and sends it every request the repository
 holds: each request example of api/openapi.json, each codec case of
 tests/api/cases (success and problem alike, to the endpoint its name
-starts with), and a GET of each GET endpoint, plus an unknown path and a
+starts with), and a GET of each GET endpoint (of each value a path
+parameter lists: every problem type's page), plus an unknown path and a
 wrong method.  Each answer's status must be one the contract lists for that
 path (or a problem status of its "default"), its Content-Type the one listed
 there, and its JSON body valid under the listed schema (JSON Schema 2020-12,
@@ -85,6 +86,16 @@ def send_raw(base, head):
     return status, headers, body.decode()
 
 
+def resolve(spec, obj):
+    """@a obj, or what its local $ref names."""
+    ref = obj.get("$ref", "")
+    if not ref.startswith("#/"):
+        return obj
+    for part in ref[2:].split("/"):
+        spec = spec[part]
+    return spec
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
@@ -93,10 +104,18 @@ def main():
     registry_root = spec
     paths = spec["paths"]
     requests = []  # (method, path, body)
+    template = {}  # a path made from a template: the template
     for path, item in paths.items():
         for method, op in item.items():
             if method == "get":
                 requests.append(("GET", path, None))
+                # a path parameter that lists its values: each value
+                for par in item.get("parameters", []):
+                    par = resolve(spec, par)
+                    for v in par.get("schema", {}).get("enum", []):
+                        concrete = path.replace("{%s}" % par["name"], v)
+                        template[concrete] = path
+                        requests.append(("GET", concrete, None))
             if method == "post":
                 exs = (op.get("requestBody", {}).get("content", {})
                        .get("application/json", {}).get("examples", {}))
@@ -133,7 +152,7 @@ def main():
                 bad.append(where + ": a 503 without Retry-After")
             if status == 405 and not headers.get("Allow"):
                 bad.append(where + ": a 405 without Allow")
-            op = paths.get(path, {}).get(method.lower())
+            op = paths.get(template.get(path, path), {}).get(method.lower())
             if op is None:  # an unknown path or method: a problem
                 ok = status in (404, 405) and \
                     ctype.startswith("application/problem+json")

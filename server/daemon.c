@@ -96,6 +96,36 @@ static int bound_port(struct MHD_Daemon *mhd, int asked) {
              : ntohs(((struct sockaddr_in *)&got)->sin_port);
 }
 
+/* The one line that says the port is taken, and the way out. */
+static void say_port_taken(const srv_config *cfg) {
+  fprintf(stderr,
+          "stickslipd: port %d on %s is taken by another program: choose "
+          "another with --port N (or STICKSLIP_PORT=N), or --port 0 for any "
+          "free one\n",
+          cfg->port, cfg->bind);
+}
+
+/* Whether the address of @a ss can be bound, tried as libmicrohttpd binds
+ * it (SO_REUSEADDR: a socket of a closed daemon in TIME_WAIT does not
+ * count): 0, or -1 with errno EADDRINUSE when another socket listens on it,
+ * so that this is said in one line, before libmicrohttpd would say it in
+ * its own words.  Any other error is left to libmicrohttpd to meet. */
+static int port_free(const struct sockaddr_storage *ss) {
+  int fd = socket(ss->ss_family, SOCK_STREAM | SOCK_CLOEXEC, 0), on = 1, rc = 0;
+  socklen_t len = ss->ss_family == AF_INET6 ? sizeof(struct sockaddr_in6)
+                                            : sizeof(struct sockaddr_in);
+  if (fd < 0)
+    return 0;
+  setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on);
+  if (ss->ss_family == AF_INET6)
+    setsockopt(fd, IPPROTO_IPV6, IPV6_V6ONLY, &on, sizeof on);
+  if (bind(fd, (const struct sockaddr *)ss, len) != 0 && errno == EADDRINUSE)
+    rc = -1;
+  close(fd);
+  errno = rc ? EADDRINUSE : errno;
+  return rc;
+}
+
 /* Enough descriptors for every connection the flags allow. */
 static void raise_fd_limit(unsigned max_conn) {
   struct rlimit rl;
@@ -167,6 +197,12 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     daemon_free(d);
     return NULL;
   }
+  if (cfg->port && port_free(&ss)) {
+    say_port_taken(cfg);
+    daemon_free(d);
+    errno = EADDRINUSE;
+    return NULL;
+  }
   raise_fd_limit(cfg->max_conn);
   /* the limits by address are srv__accept's (libmicrohttpd's own per-IP
    * limit knows no trusted proxy and no reserve).  Not libmicrohttpd's
@@ -186,19 +222,23 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
       srv__completed, d, MHD_OPTION_NOTIFY_CONNECTION, srv__connection, d,
       MHD_OPTION_URI_LOG_CALLBACK, srv__target, d, MHD_OPTION_END);
   if (!d->mhd) {
-    fprintf(stderr, "stickslipd: cannot listen on %s port %d: %s\n", cfg->bind,
-            cfg->port, strerror(errno));
+    int err = errno;
+    if (err == EADDRINUSE) /* taken since port_free looked */
+      say_port_taken(cfg);
+    else
+      fprintf(stderr, "stickslipd: cannot listen on %s port %d: %s\n",
+              cfg->bind, cfg->port, strerror(err));
     daemon_free(d);
+    errno = err;
     return NULL;
   }
   if (pthread_create(&d->monitor, NULL, srv__monitor, d) == 0)
     d->monitor_running = 1;
   int port = d->port = bound_port(d->mhd, cfg->port);
-  if (strchr(cfg->bind, ':'))
-    fprintf(stderr, "stickslipd listening on http://[%s]:%d\n", cfg->bind,
-            port);
-  else
-    fprintf(stderr, "stickslipd listening on http://%s:%d\n", cfg->bind, port);
+  snprintf(d->url, sizeof d->url,
+           strchr(cfg->bind, ':') ? "http://[%s]:%d" : "http://%s:%d",
+           cfg->bind, port);
+  fprintf(stderr, "stickslipd listening on %s\n", d->url);
   /* after the line that tells the URL, which a supervisor reads first */
   if (!cfg->no_jobs && !d->jobs)
     fprintf(stderr, "stickslipd: out of memory for jobs: none are kept\n");
@@ -215,6 +255,8 @@ int srv_add_connection(struct srv_daemon *d, int fd,
 }
 
 int srv_port(struct srv_daemon *d) { return d->port; }
+
+const char *srv_url(struct srv_daemon *d) { return d->url; }
 
 static void wait_in_flight(struct srv_daemon *d, double until) {
   struct timespec ts = {0, 10 * 1000 * 1000};

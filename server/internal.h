@@ -79,7 +79,8 @@ typedef struct srv__conn {
 struct srv_daemon {
   struct MHD_Daemon *mhd;
   srv_config cfg;
-  int port; /* the port it listens on */
+  int port;     /* the port it listens on */
+  char url[96]; /* http://ADDR:PORT/ as it listens */
   srv_metrics *metrics;
   srv_pool *pool;
   char transport[48];
@@ -133,7 +134,9 @@ typedef struct srv__req {
   const char *etag;             /* a validator for a static answer, or NULL */
   char cors[128];               /* Access-Control-Allow-Origin, or "" */
   char preflight[24];           /* OPTIONS: the methods the path takes */
-  int gzip;                     /* the client accepts gzip */
+  int page;        /* GET /problems/<type>: the page of a problem type */
+  int vary_accept; /* the answer depends on Accept (Vary: Accept) */
+  int gzip;        /* the client accepts gzip */
   char method[8];
   char path[96];
   char key[SRV_CLIENT_KEY]; /* the client, for the pool's queues */

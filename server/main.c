@@ -16,6 +16,7 @@
 #include <sys/time.h>
 #include <unistd.h>
 
+#include "notify.h"
 #include "server.h"
 #include "stickslip.h"
 
@@ -137,56 +138,95 @@ static void set_value(srv_config *cfg, const flag *f, double v) {
   }
 }
 
+/* The other options, each parsed by configure() below: name, argument
+ * (NULL: none), what it does.  --help prints these and FLAGS. */
+#define STR_(x) #x
+#define STR(x) STR_(x)
+static const struct {
+  const char *name, *arg, *help;
+} OPTIONS[] = {
+    {"--trusted-proxy", "ADDR",
+     "a proxy whose X-Forwarded-For names the client (repeatable, up to " STR(
+         SRV_MAX_PROXIES) ")"},
+    {"--cors-origin", "ORIGIN",
+     "an origin (http://host:port, or * for any) whose pages may call the "
+     "daemon from a browser (repeatable, up to " STR(
+         SRV_MAX_ORIGINS) "; none)"},
+    {"--job-store", "URI",
+     "the store of jobs: sqlite:PATH, or postgresql://... shared by "
+     "replicas (sqlite:<state-dir>/jobs.sqlite); the daemon serves without "
+     "it, jobs get 503"},
+    {"--state-dir", "DIR",
+     "where the default store is kept ($STATE_DIRECTORY, else "
+     "./stickslip-state)"},
+    {"--no-jobs", NULL,
+     "no store: Prefer: respond-async is ignored, /jobs is 404"},
+    {"--log-format", "json|plain",
+     "the access log's lines: JSON (time, request_id, client, method, path, "
+     "status, bytes, us) or plain (json)"},
+    {"--quiet", NULL, "no access log"},
+    {"--health-check", NULL,
+     "serve nothing: GET /health of the daemon these options (and the "
+     "environment) name, within 3 s; exit 0 when it answers 200, 1 "
+     "otherwise (a container's HEALTHCHECK)"},
+    {"--version", NULL, "print the version and exit"},
+    {"--help", NULL, "this text"},
+};
+#define N_OPTIONS (sizeof OPTIONS / sizeof OPTIONS[0])
+
+/* One option of --help: "  NAME ARG" in 26 columns, then @a help from
+ * column 28, wrapped at 79 (on the next line when NAME ARG is longer). */
+static void usage_line(FILE *f, const char *name, const char *arg,
+                       const char *help) {
+  enum { COL = 28, ROOM = 79 - COL };
+  char head[64];
+  snprintf(head, sizeof head, "%s%s%s", name, arg ? " " : "", arg ? arg : "");
+  int first = fprintf(f, "  %-25s ", head) <= COL;
+  while (*help) {
+    size_t n = strlen(help);
+    if (n > ROOM) { /* up to the last space that fits, or the first after */
+      for (n = ROOM; n > 0 && help[n] != ' '; n--)
+        ;
+      if (n == 0)
+        n = strcspn(help, " ");
+    }
+    if (!first)
+      fprintf(f, "\n%*s", COL, "");
+    fwrite(help, 1, n, f);
+    help += n;
+    help += *help == ' ';
+    first = 0;
+  }
+  fputc('\n', f);
+}
+
 static void usage(FILE *f, const srv_config *defaults) {
   fprintf(f, "usage: stickslipd [options]\n\n"
              "Serves the stick-slip orbit solver over HTTP/JSON:\n");
   for (size_t i = 0; i < api_endpoint_count(); i++)
     fprintf(f, "  %-5s %s\n", api_endpoint_at(i)->method,
             api_endpoint_at(i)->path);
-  fprintf(f,
-          "Prints the URL it listens on to stderr when ready.\n\n"
-          "  --bind ADDR               address to listen on (STICKSLIP_BIND;\n"
-          "                            default 127.0.0.1; IPv6 allowed)\n");
+  fprintf(f, "Prints the URL it listens on to stderr when ready, and tells "
+             "systemd READY=1\n(NOTIFY_SOCKET).\n\n");
+  usage_line(f, "--bind", "ADDR",
+             "address to listen on (STICKSLIP_BIND; default 127.0.0.1; IPv6 "
+             "allowed)");
   for (size_t i = 0; i < N_FLAGS; i++) {
-    char name[40];
-    snprintf(name, sizeof name, "%s %s", FLAGS[i].name,
-             FLAGS[i].type == F_DOUBLE ? "X" : "N");
-    fprintf(f, "  %-25s %s (%.10g)\n", name, FLAGS[i].help,
-            get_value(defaults, &FLAGS[i]));
+    char help[512];
+    snprintf(help, sizeof help, "%s (%.10g)", FLAGS[i].help,
+             get_value(defaults, &FLAGS[i]));
+    usage_line(f, FLAGS[i].name, FLAGS[i].type == F_DOUBLE ? "X" : "N", help);
   }
+  for (size_t i = 0; i < N_OPTIONS; i++)
+    usage_line(f, OPTIONS[i].name, OPTIONS[i].arg, OPTIONS[i].help);
   fprintf(
-      f,
-      "  --trusted-proxy ADDR      a proxy whose X-Forwarded-For names the\n"
-      "                            client (repeatable, up to %d)\n",
-      SRV_MAX_PROXIES);
-  fprintf(
-      f,
-      "  --cors-origin ORIGIN      an origin (http://host:port, or * for any)\n"
-      "                            whose pages may call the daemon from a\n"
-      "                            browser (repeatable, up to %d; none)\n",
-      SRV_MAX_ORIGINS);
-  fprintf(f,
-          "  --job-store URI           the store of jobs: sqlite:PATH, or\n"
-          "                            postgresql://... shared by replicas\n"
-          "                            (sqlite:<state-dir>/jobs.sqlite); the\n"
-          "                            daemon serves without it, jobs get 503\n"
-          "  --state-dir DIR           where the default store is kept\n"
-          "                            ($STATE_DIRECTORY, else\n"
-          "                            ./stickslip-state)\n"
-          "  --no-jobs                 no store: Prefer: respond-async is\n"
-          "                            ignored, /jobs is 404\n");
-  fprintf(f,
-          "  --log-format json|plain   the access log's lines: JSON (time,\n"
-          "                            request_id, client, method, path,\n"
-          "                            status, bytes, us) or plain (json)\n"
-          "  --quiet                   no access log\n"
-          "  --version                 print the version and exit\n"
-          "  --help                    this text\n\n"
-          "Every option can also be set in the environment as STICKSLIP_ and\n"
-          "its name in capitals with underscores (STICKSLIP_MAX_SECONDS=30,\n"
-          "STICKSLIP_QUIET=1, STICKSLIP_TRUSTED_PROXY=ADDR[,ADDR...],\n"
-          "STICKSLIP_CORS_ORIGIN=ORIGIN[,ORIGIN...]); the\n"
-          "command line wins.\n");
+      f, "\nEvery option can also be set in the environment as STICKSLIP_ and\n"
+         "its name in capitals with underscores (STICKSLIP_MAX_SECONDS=30,\n"
+         "STICKSLIP_QUIET=1, STICKSLIP_TRUSTED_PROXY=ADDR[,ADDR...],\n"
+         "STICKSLIP_CORS_ORIGIN=ORIGIN[,ORIGIN...]); the\n"
+         "command line wins.\n"
+         "Exit status: 0 after SIGTERM or SIGINT, --help, --version; 1 when "
+         "it cannot\nstart; 2 for a bad option; 3 when its port is taken.\n");
 }
 
 /* The value of flag @a f from the text @a s: a number within its range,
@@ -487,6 +527,14 @@ static int configure(srv_config *cfg, int argc, char **argv) {
   return default_store(cfg) ? 2 : 0;
 }
 
+/* Tell the service manager @a state (a unit of Type=notify waits for
+ * READY=1); a failure is said, once per state, and the daemon goes on. */
+static void tell_manager(const char *state) {
+  if (srv_notify(state))
+    fprintf(stderr, "stickslipd: cannot notify NOTIFY_SOCKET %s: %s\n",
+            getenv("NOTIFY_SOCKET"), strerror(errno));
+}
+
 int main(int argc, char **argv) {
   srv_config cfg;
   defaults(&cfg);
@@ -523,13 +571,21 @@ int main(int argc, char **argv) {
   pthread_sigmask(SIG_BLOCK, &set, NULL);
   struct srv_daemon *d = srv_start(&cfg);
   if (!d)
-    return 1;
+    return errno == EADDRINUSE ? 3 : 1;
+  char state[192];
+  snprintf(state, sizeof state, "READY=1\nSTATUS=serving on %s", srv_url(d));
+  tell_manager(state);
   int sig = 0;
   /* SIGHUP (a terminal closing, a log rotation) does not stop the daemon:
    * its log is its standard error, which it never reopens */
   while (sigwait(&set, &sig) == 0 && sig == SIGHUP)
     fprintf(stderr, "stickslipd: SIGHUP ignored\n");
   fprintf(stderr, "stickslipd: signal %d, draining\n", sig);
+  snprintf(state, sizeof state,
+           "STOPPING=1\nSTATUS=draining on signal %d: the requests in "
+           "flight finish within --drain %g s",
+           sig, cfg.drain);
+  tell_manager(state);
   srv_stop(d);
   fprintf(stderr, "stickslipd: stopped\n");
   return 0;

@@ -153,6 +153,8 @@ enum MHD_Result srv__send_body(struct MHD_Connection *c, srv__req *r,
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype);
   if (compressible(ctype))
     MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Accept-Encoding");
+  if (r->vary_accept)
+    MHD_add_response_header(resp, MHD_HTTP_HEADER_VARY, "Accept");
   if (gz)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_ENCODING, "gzip");
   srv__common_headers(r, resp);

@@ -238,6 +238,51 @@ static void request_id(struct srv_daemon *d, struct MHD_Connection *c,
   snprintf(r->rid, sizeof r->rid, "%016llx", z);
 }
 
+/* ---- the pages of the problem types -------------------------------------- */
+
+#define PAGE_PREFIX "/problems/"
+
+/* GET /problems/<type>, the page that a problem's type URI names: routed
+ * here, written by the api (api_problem_page).  1 when @a url is one. */
+static int page_admit(srv__req *r, const char *url, const char *method) {
+  if (strncmp(url, PAGE_PREFIX, sizeof PAGE_PREFIX - 1))
+    return 0;
+  r->page = 1;
+  if (!strcmp(method, "OPTIONS")) {
+    snprintf(r->preflight, sizeof r->preflight, "GET, OPTIONS");
+  } else if (strcmp(method, "GET") && strcmp(method, "HEAD")) {
+    snprintf(r->p_detail, sizeof r->p_detail, "this resource takes GET");
+    srv__defer(r, API_P_METHOD_NOT_ALLOWED, NULL, "GET");
+  } else if (strlen(url) >= sizeof r->path) {
+    srv__defer(r, API_P_NOT_FOUND, "no such problem type", NULL);
+  }
+  return 1;
+}
+
+/* Whether the client asks for HTML: its Accept names text/html with a
+ * weight above 0, as a browser's does; curl's (any type) and application/json
+ * get JSON. */
+static int accepts_html(struct MHD_Connection *c) {
+  const char *a = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Accept");
+  for (const char *p = a; p && *p; p += strcspn(p, ",")) {
+    p += strspn(p, ", \t");
+    if (strncasecmp(p, "text/html", 9) || (p[9] && !strchr(",; \t", p[9])))
+      continue;
+    const char *q = strstr(p, "q=");
+    size_t n = strcspn(p, ",");
+    if (!q || q > p + n || strtod(q + 2, NULL) > 0)
+      return 1;
+  }
+  return 0;
+}
+
+static enum MHD_Result send_page(struct MHD_Connection *c, srv__req *r) {
+  api_response ar;
+  api_problem_page(r->path + sizeof PAGE_PREFIX - 1, accepts_html(c), &ar);
+  r->vary_accept = 1;
+  return srv__send_api(c, r, &ar, NULL);
+}
+
 /* The first call of a request: its headers are in.  Route it, and refuse
  * now what can be refused from the headers alone. */
 static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
@@ -279,8 +324,8 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
   if (atomic_load(&d->draining))
     return srv__defer(r, API_P_SHUTTING_DOWN, "the server is shutting down",
                       NULL);
-  if (srv__jobs_admit(d, c, r, url, method))
-    return MHD_YES; /* /jobs...: answered on the last call */
+  if (srv__jobs_admit(d, c, r, url, method) || page_admit(r, url, method))
+    return MHD_YES; /* /jobs..., /problems/...: answered on the last call */
   if (srv__docs_admit(r, url, method))
     return MHD_YES; /* /docs...: likewise */
   int route = api_route(method, url, &ep);
@@ -585,6 +630,8 @@ enum MHD_Result srv__handler(void *cls, struct MHD_Connection *c,
     return srv__submit(d, c, r);
   if (r->doc)
     return srv__docs_answer(c, r);
+  if (r->page)
+    return send_page(c, r);
   if (!r->is_post) {
     api_response ar;
     if (d->etags[r->ep][0]) {

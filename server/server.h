@@ -179,7 +179,8 @@ void srv_metrics_jobs(srv_metrics *m, int known, const long by_status[5],
                       long pending);
 char *srv_metrics_render(srv_metrics *m); /* malloc'd */
 
-/** Start the daemon; prints the URL to stderr when ready.  NULL on error. */
+/** Start the daemon; prints the URL to stderr when ready.  NULL on error,
+ *  said on stderr; errno EADDRINUSE when its port is taken. */
 struct srv_daemon;
 struct srv_daemon *srv_start(const srv_config *cfg);
 /** Hand the daemon a connected socket @a fd, as if it had accepted it from
@@ -196,6 +197,9 @@ unsigned long srv_connections_started(struct srv_daemon *d);
 
 /* The port the daemon listens on (the one the system chose for port 0). */
 int srv_port(struct srv_daemon *d);
+/* The URL it listens on, http://ADDR:PORT ([ADDR] for IPv6), as it
+ * prints it when it is ready. */
+const char *srv_url(struct srv_daemon *d);
 
 /* What the monitor knows of one connection, for diagnosing a stall. */
 typedef struct srv_conn_state {

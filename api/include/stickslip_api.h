@@ -356,6 +356,27 @@ int api_problem_status(api_problem_kind kind);
 void api_problem(api_response *out, api_problem_kind kind, const char *detail,
                  const char *pointer, const char *limit, double limit_value);
 
+/** The type of a problem kind, the tail of its "/problems/<type>" URI
+ *  ("invalid-value"); NULL for an unknown kind. */
+const char *api_problem_type(api_problem_kind kind);
+
+/** The number of problem types that have a page: one per distinct type of
+ *  API_PROBLEM_MAP. */
+size_t api_problem_page_count(void);
+
+/** The type of page @a i ("invalid-value"); NULL when @a i is out of
+ *  range. */
+const char *api_problem_page_type(size_t i);
+
+/**
+ * The page of problem type @a type (the tail of "/problems/<type>"), what
+ * GET /problems/<type> answers: its title, HTTP statuses, what it means and
+ * how to fix the request; as an HTML document when @a html, else as JSON
+ * {"type", "title", "status": [..], "meaning", "fix"}.  200; or 404, a
+ * not-found problem, for a type that is not one.  Always fills @a out.
+ */
+int api_problem_page(const char *type, int html, api_response *out);
+
 /** The OpenAPI document (api/openapi.json, with the project's version). */
 const char *api_openapi_json(void);
 

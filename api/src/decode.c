@@ -154,7 +154,7 @@ static int number(const api_field *f, const json_t *v, const char *p,
     return api__fail(e, API_P_INVALID_VALUE, p, "%s must be finite", p);
   if (f->lo < f->hi && !(*out >= f->lo && *out <= f->hi))
     return api__fail(e, API_P_INVALID_VALUE, p,
-                     "%s must be between %g and %g (got %.15g)", p, f->lo,
+                     "%s must be between %g and %g (got %.17g)", p, f->lo,
                      f->hi, *out);
   return 0;
 }

@@ -3,6 +3,7 @@
  * status of the core into an HTTP answer.
  */
 #define _POSIX_C_SOURCE 200809L
+#include <ctype.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,6 +12,7 @@
 #include <jansson.h>
 
 #include "problem.h"
+#include "shortest.h"
 
 typedef struct problem_row {
   int status;
@@ -58,6 +60,59 @@ int api_problem_status(api_problem_kind kind) {
   return (unsigned)kind < API_P_COUNT ? PROBLEMS[kind].status : 500;
 }
 
+/* The length of the number that starts at s[i] when it is written with 16
+ * or 17 significant digits (as %.17g writes a double that has no shorter
+ * form, and %.17g is how the core and the codec write a number so that it
+ * reads back exactly); 0 for anything else: an integer, a number already
+ * short, a number inside a word. */
+static size_t long_number(const char *s, size_t i) {
+  size_t n = i, digits = 0, lead = 1;
+  int point = 0;
+  if (i > 0 &&
+      (isalnum((unsigned char)s[i - 1]) || s[i - 1] == '.' || s[i - 1] == '_'))
+    return 0;
+  for (; isdigit((unsigned char)s[n]) || (s[n] == '.' && !point); n++) {
+    if (s[n] == '.')
+      point = 1;
+    else if (s[n] != '0' || !lead)
+      digits++, lead = 0;
+  }
+  if (digits < 16)
+    return 0;
+  if ((s[n] == 'e' || s[n] == 'E') && (s[n + 1] == '+' || s[n + 1] == '-') &&
+      isdigit((unsigned char)s[n + 2]))
+    for (n += 2; isdigit((unsigned char)s[n]);)
+      n++;
+  else if (!point)
+    return 0;
+  return isalnum((unsigned char)s[n]) || s[n] == '_' ? 0 : n - i;
+}
+
+/* Every number of @a s that is written with 16 or 17 significant digits
+ * rewritten in the fewest digits that read back as the same double
+ * (shortest.c), as the answers write their numbers: 0.69999999999999996
+ * becomes 0.7.  A whole number loses the ".0" that JSON needs and prose
+ * does not. */
+static void shorten_numbers(char *s, size_t cap) {
+  char out[sizeof((api_err *)0)->detail], num[32];
+  size_t o = 0;
+  for (size_t i = 0; s[i] && o + 1 < sizeof out;) {
+    size_t n = long_number(s, i);
+    if (!n) {
+      out[o++] = s[i++];
+      continue;
+    }
+    int len = api__shortest(strtod(s + i, NULL), num);
+    if (len > 2 && !strcmp(num + len - 2, ".0"))
+      num[len -= 2] = 0;
+    for (int k = 0; k < len && o + 1 < sizeof out; k++)
+      out[o++] = num[k];
+    i += n;
+  }
+  out[o] = 0;
+  snprintf(s, cap, "%s", out);
+}
+
 static int vfail(api_err *e, api_problem_kind kind, const char *pointer,
                  const char *fmt, va_list ap) {
   if (e->set)
@@ -66,6 +121,7 @@ static int vfail(api_err *e, api_problem_kind kind, const char *pointer,
   e->kind = (unsigned)kind < API_P_COUNT ? kind : API_P_INTERNAL;
   snprintf(e->pointer, sizeof e->pointer, "%s", pointer ? pointer : "");
   vsnprintf(e->detail, sizeof e->detail, fmt, ap);
+  shorten_numbers(e->detail, sizeof e->detail);
   return -1;
 }
 

@@ -25,8 +25,7 @@ int ss_params_check(const ss_params *p, ss_diag *d) {
     return rc;
   if (!(p->chi < 1))
     return ss__fail(d, SS_EDOMAIN, "chi", p->chi,
-                    "chi = k2/(k1+k2) must satisfy 0 < chi < 1 (got %.17g)",
-                    p->chi);
+                    "chi must satisfy 0 < chi < 1 (got %.17g)", p->chi);
   if ((rc = check_pos(d, "eta", p->eta)) || (rc = check_pos(d, "us", p->us)) ||
       (rc = check_pos(d, "ur", p->ur)) || (rc = check_pos(d, "V", p->V)))
     return rc;
@@ -36,6 +35,39 @@ int ss_params_check(const ss_params *p, ss_diag *d) {
                     "static friction ur (%.17g)",
                     p->us, p->ur);
   return SS_OK;
+}
+
+/* Each dimensionless parameter as the physical ones make it (DESIGN.md
+ * section 1), and the physical value it is made from, in the order of
+ * SS_PARAM_NAMES. */
+static const struct {
+  const char *formula, *from;
+} FROM_PHYSICAL[] = {
+    {"k2/(k1+k2)", "k2"},
+    {"m1/m2", "m1"},
+    {"Fs/(k1+k2)", "Fs"},
+    {"Fr/(k1+k2)", "Fr"},
+    {"v0/omega, omega = sqrt((k1+k2)/m1)", "v0"},
+};
+_Static_assert(sizeof FROM_PHYSICAL / sizeof FROM_PHYSICAL[0] == SS_PARAM_V + 1,
+               "one row per parameter of SS_PARAM_NAMES");
+
+/* The parameters converted from valid physical values can still leave their
+ * domain when the values differ by many orders of magnitude (k1 negligible
+ * beside k2 gives chi = 1; a quotient overflows).  The problem is then told
+ * in the units the caller used: the formula that made the parameter, and
+ * the physical value it was made from. */
+static int physical_check(const ss_params *p, ss_diag *d) {
+  ss_diag own;
+  ss_param_id id;
+  ss_diag_clear(&own);
+  int rc = ss_params_check(p, &own);
+  if (rc == SS_OK || ss_param_by_name(own.where, &id) != SS_OK)
+    return rc ? ss__fail(d, rc, own.where, own.value, "%s", own.text) : rc;
+  return ss__fail(d, rc, FROM_PHYSICAL[id].from, own.value,
+                  "%s = %s, made from these physical values, is out of "
+                  "range: %s",
+                  own.where, FROM_PHYSICAL[id].formula, own.text);
 }
 
 int ss_params_from_physical(const ss_physical *ph, ss_params *p, double *omega,
@@ -63,8 +95,7 @@ int ss_params_from_physical(const ss_physical *ph, ss_params *p, double *omega,
   p->V = ph->v0 / om;
   if (omega)
     *omega = om;
-  rc = ss_params_check(p, d);
-  return rc;
+  return physical_check(p, d);
 }
 
 void ss_to_physical(double omega, double t, const double x[4], double *t_out,

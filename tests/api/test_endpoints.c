@@ -3,9 +3,12 @@
  * codec cases.  Every row of the table is a path and method of
  * api/openapi.json and every path and method there is a row; labels are
  * unique; routing finds each row, refuses another method with 405 and an
- * unknown path with 404; every computing endpoint has codec cases.
- * Usage: test_endpoints CASES_DIR
+ * unknown path with 404; every computing endpoint has codec cases; every
+ * problem type has its page, and so has every "/problems/..." the sources
+ * write.
+ * Usage: test_endpoints CASES_DIR SOURCE_DIR
  */
+#define _POSIX_C_SOURCE 200809L
 #include <ctype.h>
 #include <dirent.h>
 #include <jansson.h>
@@ -84,8 +87,8 @@ static void test_spec_and_table(void) {
       served += by != NULL;
     }
   }
-  /* the jobs' resources (README "Jobs") */
-  ASSERT_EQ_INT(served, 4);
+  /* the jobs' resources (README "Jobs") and the problem types' pages */
+  ASSERT_EQ_INT(served, 5);
   ASSERT_TRUE(in_spec == n);
   size_t got;
   ASSERT_EQ_INT(api_route("GET", "/nope", &got), 404);
@@ -160,6 +163,135 @@ static void test_problem_table(void) {
   ASSERT_TRUE(strstr(r.body, "\"type\":\"/problems/method-not-allowed\""));
   ASSERT_TRUE(!strcmp(r.content_type, "application/problem+json"));
   api_response_free(&r);
+}
+
+/* The page of problem type @a type as JSON: 0 when it is one, whose
+ * statuses include @a status (0: any). */
+static int page_ok(const char *type, int status) {
+  api_response r;
+  char uri[96];
+  int ok = api_problem_page(type, 0, &r) == 200 &&
+           !strcmp(r.content_type, "application/json");
+  json_t *body = ok ? json_loads(r.body, 0, NULL) : NULL;
+  json_t *st = json_object_get(body, "status");
+  snprintf(uri, sizeof uri, "/problems/%s", type);
+  ok = ok && !strcmp(json_string_value(json_object_get(body, "type")), uri) &&
+       json_string_length(json_object_get(body, "meaning")) > 40 &&
+       json_string_length(json_object_get(body, "fix")) > 20;
+  int has = status == 0;
+  for (size_t i = 0; ok && i < json_array_size(st); i++)
+    has |= json_integer_value(json_array_get(st, i)) == status;
+  json_decref(body);
+  api_response_free(&r);
+  return ok && has ? 0 : -1;
+}
+
+/* Every "/problems/<type>" written in the files under @a path (a file or a
+ * directory, recursively: C, Python, JSON) must have a page; the count of
+ * those met into *n. */
+static void scan_sources(const char *path, size_t *n) {
+  DIR *d = opendir(path);
+  if (d) {
+    struct dirent *de;
+    while ((de = readdir(d))) {
+      char sub[1024];
+      if (de->d_name[0] == '.')
+        continue;
+      snprintf(sub, sizeof sub, "%s/%s", path, de->d_name);
+      scan_sources(sub, n);
+    }
+    closedir(d);
+    return;
+  }
+  const char *ext = strrchr(path, '.');
+  if (!ext || (strcmp(ext, ".c") && strcmp(ext, ".h") && strcmp(ext, ".py") &&
+               strcmp(ext, ".json")))
+    return;
+  FILE *f = fopen(path, "rb");
+  char *text = NULL;
+  size_t cap = 0;
+  ssize_t len = f ? getdelim(&text, &cap, '\0', f) : -1;
+  for (char *p = len > 0 ? strstr(text, "/problems/") : NULL; p;
+       p = strstr(p + 1, "/problems/")) {
+    char type[64];
+    size_t k = 0;
+    for (const char *q = p + 10;
+         (islower((unsigned char)*q) || *q == '-') && k + 1 < sizeof type; q++)
+      type[k++] = *q;
+    type[k] = 0;
+    if (!k || (p[10 + k] == '{')) /* "/problems/{type}", a template */
+      continue;
+    (*n)++;
+    if (page_ok(type, 0))
+      TEST_FAIL_("%s names /problems/%s, which has no page", path, type);
+  }
+  free(text);
+  if (f)
+    fclose(f);
+}
+
+/* EVIDENCE: RFC 9457 section 3.1.1, a type URI that documents itself:
+ * every problem type the daemon answers (the table's, and every one its
+ * sources, tests and contract write) has a page, HTML or JSON; the
+ * contract's list of pages is the table's; another type is 404 */
+static void test_problem_pages(const char *root) {
+  for (int k = 0; k < API_P_COUNT; k++) {
+    const char *type = api_problem_type((api_problem_kind)k);
+    if (page_ok(type, api_problem_status((api_problem_kind)k)))
+      TEST_FAIL_("problem type %s (HTTP %d) has no page", type,
+                 api_problem_status((api_problem_kind)k));
+    test_checks_++;
+    api_response r;
+    ASSERT_EQ_INT(api_problem_page(type, 1, &r), 200);
+    ASSERT_TRUE(!strncmp(r.content_type, "text/html", 9) &&
+                !strncmp(r.body, "<!DOCTYPE html>", 15) &&
+                strstr(r.body, "How to fix the request"));
+    api_response_free(&r);
+  }
+  json_t *spec = json_loads(api_openapi_json(), 0, NULL);
+  json_t *types = json_object_get(
+      json_object_get(
+          json_object_get(json_object_get(json_object_get(spec, "components"),
+                                          "parameters"),
+                          "ProblemType"),
+          "schema"),
+      "enum");
+  size_t pages = api_problem_page_count();
+  ASSERT_TRUE(json_array_size(types) == pages);
+  for (size_t i = 0; i < pages; i++) {
+    /* a page only for a type of the table */
+    int of_table = 0;
+    for (int k = 0; k < API_P_COUNT; k++)
+      of_table |= !strcmp(api_problem_page_type(i),
+                          api_problem_type((api_problem_kind)k));
+    if (!of_table)
+      TEST_FAIL_("page %s is of no problem type", api_problem_page_type(i));
+    if (strcmp(json_string_value(json_array_get(types, i)),
+               api_problem_page_type(i)))
+      TEST_FAIL_("openapi.json's ProblemType %zu is not page %s", i,
+                 api_problem_page_type(i));
+    test_checks_++;
+  }
+  json_decref(spec);
+  api_response r;
+  ASSERT_EQ_INT(api_problem_page("no-such-type", 0, &r), 404);
+  ASSERT_TRUE(strstr(r.body, "\"type\":\"/problems/not-found\""));
+  api_response_free(&r);
+  ASSERT_EQ_INT(api_problem_page("", 1, &r), 404);
+  api_response_free(&r);
+  /* the types written in the sources, the tests and the contract */
+  static const char *const where[] = {
+      "api/src",    "api/include", "server",          "python",
+      "tests/http", "tests/api",   "api/openapi.json"};
+  size_t met = 0;
+  for (size_t i = 0; i < sizeof where / sizeof where[0]; i++) {
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", root, where[i]);
+    scan_sources(path, &met);
+  }
+  /* the tests alone name a dozen types */
+  if (met < 50)
+    TEST_FAIL_("only %zu \"/problems/\" met under %s", met, root);
 }
 
 /* The answer the status table gives a core status. */
@@ -446,13 +578,14 @@ static void test_continue_fields(void) {
 }
 
 int main(int argc, char **argv) {
-  if (argc < 2) {
-    fprintf(stderr, "usage: test_endpoints CASES_DIR\n");
+  if (argc < 3) {
+    fprintf(stderr, "usage: test_endpoints CASES_DIR SOURCE_DIR\n");
     return 2;
   }
   test_spec_and_table();
   test_cases_cover_table(argv[1]);
   test_problem_table();
+  test_problem_pages(argv[2]);
   test_status_table();
   test_streams();
   test_batch();

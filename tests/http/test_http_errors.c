@@ -105,12 +105,71 @@ static void test_bad_input(void) {
                      1);
 }
 
+/* GET /problems/<type> with @a accept (or none): the answer. */
+static void get_page(const char *type, const char *accept, http_resp *r) {
+  char req[512];
+  int n = snprintf(req, sizeof req,
+                   "GET /problems/%s HTTP/1.1\r\nHost: x\r\n%s%s%s"
+                   "Connection: close\r\n\r\n",
+                   type, accept ? "Accept: " : "", accept ? accept : "",
+                   accept ? "\r\n" : "");
+  ASSERT_TRUE(http_raw(PORT, req, (size_t)n, r) == 0);
+}
+
+/* EVIDENCE: RFC 9457 section 3.1.1: the type URI of a problem the daemon
+ * answers is a page over HTTP, HTML for a browser and JSON otherwise, that
+ * says how to fix the request; it is the type of the problem itself */
+static void test_problem_pages(void) {
+  http_resp r;
+  json_t *p = expect_problem("a problem to look up", "POST", "/orbit", JSON,
+                             "{\"params\":{\"chi\":2,\"eta\":4,\"us\":0.07,"
+                             "\"ur\":0.6,\"V\":1}}",
+                             422, "/problems/invalid-value", "/params/chi");
+  const char *type = json_string_value(json_object_get(p, "type"));
+  ASSERT_TRUE(type && !strncmp(type, "/problems/", 10));
+  get_page(type ? type + 10 : "", NULL, &r);
+  ASSERT_EQ_INT(r.status, 200);
+  ASSERT_TRUE(!strcmp(r.ctype, "application/json"));
+  json_t *page = json_loads(r.body, 0, NULL);
+  ASSERT_TRUE(type &&
+              !strcmp(json_string_value(json_object_get(page, "type")), type));
+  ASSERT_TRUE(json_integer_value(
+                  json_array_get(json_object_get(page, "status"), 0)) == 422);
+  ASSERT_TRUE(json_string_length(json_object_get(page, "fix")) > 0);
+  ASSERT_TRUE(strstr(r.raw, "Vary: Accept\r\n") != NULL);
+  json_decref(page);
+  http_free(&r);
+  /* a browser's Accept */
+  get_page("invalid-value",
+           "text/html,application/xhtml+xml,application/xml;q=0.9,*/*;q=0.8",
+           &r);
+  ASSERT_EQ_INT(r.status, 200);
+  ASSERT_TRUE(!strncmp(r.ctype, "text/html", 9));
+  ASSERT_TRUE(strstr(r.body, "<h1>") && strstr(r.body, "0 &lt; chi &lt; 1"));
+  http_free(&r);
+  /* HTML refused (q=0), and curl's any type: JSON */
+  get_page("invalid-value", "text/html;q=0, application/json", &r);
+  ASSERT_TRUE(r.status == 200 && !strcmp(r.ctype, "application/json"));
+  http_free(&r);
+  get_page("invalid-value", "*/*", &r);
+  ASSERT_TRUE(r.status == 200 && !strcmp(r.ctype, "application/json"));
+  http_free(&r);
+  json_decref(p);
+  json_decref(expect_problem("no such problem type", "GET",
+                             "/problems/Unknown-type", NULL, NULL, 404,
+                             "/problems/not-found", NULL));
+  json_decref(expect_problem("a page takes GET", "POST",
+                             "/problems/invalid-value", JSON, "{}", 405,
+                             "/problems/method-not-allowed", NULL));
+}
+
 int main(int argc, char **argv) {
   daemon_proc d;
   if (fixture_init(argc, argv))
     return 2;
   fixture_daemon_start(&d);
   test_bad_input();
+  test_problem_pages();
   fixture_daemon_stop(&d);
   TEST_DONE();
 }
