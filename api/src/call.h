@@ -18,6 +18,7 @@ typedef struct api_call {
   const api_server_info *srv; /* may be NULL */
   api_err *e;
   api_lazies *lazy; /* the answer's lazy arrays (writer.c) */
+  api_form form;    /* the form of the answer asked for (api_negotiate) */
 } api_call;
 
 /* The threads a /map or a /basins runs on: --map-threads, no more than the
