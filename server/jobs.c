@@ -406,6 +406,9 @@ static void run_chunk(runner *ru, store *st, const char *id, long k) {
     return;
   }
   api_limits lim = chunk_limits(js, sj.started);
+  size_t ep = api_endpoint_count(); /* its endpoint, for the metrics */
+  api_form form;
+  srv__job_route(sj.path, &ep, &form);
   pthread_mutex_lock(&js->mu);
   ru->busy = 1;
   snprintf(ru->id, sizeof ru->id, "%s", id);
@@ -441,7 +444,8 @@ static void run_chunk(runner *ru, store *st, const char *id, long k) {
         js->d, rc,
         store_complete(st, js->owner, id, k, out.body, out.len, srv__wall()));
     if (rc == 0)
-      srv_metrics_job_chunk(js->d->metrics);
+      srv_metrics_job_chunk(js->d->metrics, ep,
+                            api_job_chunk_items(job, (size_t)k));
     else if (rc == STORE_ERROR)
       fprintf(stderr, "stickslipd: job %s chunk %ld not stored: %s\n", id, k,
               store_error(st));
