@@ -226,8 +226,10 @@ void api_batch_free(api_batch *b);
  * items (each chunk: their lines), and a last chunk writes the done line;
  * a /map's full searches of its lattice are cut in groups, and a last
  * chunk spreads them and writes the answer; a /basins' rows of cells are
- * cut in groups.  Progress is told in items: batch items, map or basin
- * cells (api_job_items).
+ * cut in groups (in its NDJSON form, api_job_open_form, each group's
+ * result is a line of the answer, so its results grow as they are
+ * stored).  Progress is told in items: batch items, map or basin cells
+ * (api_job_items).
  */
 typedef struct api_job api_job;
 

@@ -55,8 +55,9 @@ static const struct {
 
 /*
  * The endpoints that cut their jobs: one row each, the endpoint's name in
- * API_ENDPOINTS, its cut and run (job.h), the media type of its answer,
- * and its open (job.h) or NULL.  An endpoint that is not here answers in
+ * API_ENDPOINTS, its cut and run (job.h), the media type of its answer
+ * (in its other form, API_FORM_NDJSON, application/x-ndjson), and its
+ * open (job.h) or NULL.  An endpoint that is not here answers in
  * one chunk, application/json.
  */
 #define API_JOB_CUTS(X)                                                        \
