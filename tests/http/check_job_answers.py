@@ -172,8 +172,10 @@ def main():
             return 77
         name = "ss_job_answers_%d" % os.getpid()
         store = database(uri, name, True)
+    # the synchronous answers of a daemon built with the sanitizers take
+    # longer than the default --max-seconds
     p = subprocess.Popen([daemon, "--port", "0", "--quiet", "--job-store",
-                          store, "--job-workers", "1"],
+                          store, "--job-workers", "1", "--max-seconds", "300"],
                          stderr=subprocess.PIPE, stdout=subprocess.DEVNULL,
                          text=True)
     try:
