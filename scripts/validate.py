@@ -14,7 +14,8 @@ there, and its JSON body valid under the listed schema (JSON Schema 2020-12,
 as OpenAPI 3.1 and 3.2 use, with the document's $refs), by the python3-jsonschema
 validator; every answer must carry X-Request-Id (a 405 Allow, a 503
 Retry-After).  NDJSON answers are checked line by line, each line under the
-itemSchema of the media type (OpenAPI 3.2).  Two requests with smuggling framing check
+itemSchema of the media type (OpenAPI 3.2); an endpoint that answers in
+JSON and NDJSON is asked each example in both (Accept).  Two requests with smuggling framing check
 the 400 every path may give.  Exit 0 when
 every answer is valid; 77 when jsonschema is not installed.
 """
@@ -52,11 +53,13 @@ def start(binary):
     return p, m.group(0).rstrip("/")
 
 
-def send(base, method, path, body=None):
+def send(base, method, path, body=None, accept=None):
     data = body.encode() if body is not None else None
+    headers = {"Content-Type": "application/json"} if body is not None else {}
+    if accept:
+        headers["Accept"] = accept
     req = urllib.request.Request(base + path, data=data, method=method,
-                                 headers={"Content-Type": "application/json"}
-                                 if body is not None else {})
+                                 headers=headers)
     try:
         with urllib.request.urlopen(req, timeout=120) as r:
             return r.status, r.headers, r.read().decode()
@@ -119,8 +122,14 @@ def main():
             if method == "post":
                 exs = (op.get("requestBody", {}).get("content", {})
                        .get("application/json", {}).get("examples", {}))
+                ok = op.get("responses", {}).get("200", {}).get("content", {})
                 for ex in exs.values():
                     requests.append(("POST", path, json.dumps(ex["value"])))
+                    # an endpoint's other form, asked for with Accept
+                    if "application/json" in ok and \
+                            "application/x-ndjson" in ok:
+                        requests.append(("POST", path, json.dumps(ex["value"]),
+                                         "application/x-ndjson"))
     labels = {p.strip("/").replace(".json", ""): p for p in paths}
     for case in sorted(glob.glob(os.path.join(ROOT, "tests", "api", "cases",
                                               "*", "request.json"))):
@@ -138,11 +147,12 @@ def main():
     proc, base = start(sys.argv[1])
     bad, checked = [], 0
     try:
-        for method, path, body in requests:
+        for method, path, body, *accept in requests:
             if body is not None and body.startswith(method + " "):
                 status, headers, text = send_raw(base, body)
             else:
-                status, headers, text = send(base, method, path, body)
+                status, headers, text = send(base, method, path, body,
+                                             *accept)
             ctype = headers.get("Content-Type", "")
             where = "%s %s -> %d" % (method, path, status)
             # the headers every answer, or every such answer, carries

@@ -137,6 +137,7 @@ typedef struct srv__req {
   int page;        /* GET /problems/<type>: the page of a problem type */
   int vary_accept; /* the answer depends on Accept (Vary: Accept) */
   int gzip;        /* the client accepts gzip */
+  int form; /* the answer's form its Accept asks for (api_negotiate) */
   char method[8];
   char path[96];
   char key[SRV_CLIENT_KEY]; /* the client, for the pool's queues */
@@ -293,6 +294,13 @@ store *srv__jobs_store(srv__jobs *js);
 void srv__jobs_wake(srv__jobs *js);
 /* Job @a id was dismissed here: its chunks computing stop at once. */
 void srv__jobs_cancel(srv__jobs *js, const char *id);
+/* The path a job of endpoint @a ep answering in @a form is stored under
+ * (its endpoint's path; "?f=ndjson" after it for API_FORM_NDJSON), into
+ * @a path of @a n bytes. */
+void srv__job_path(size_t ep, api_form form, char *path, size_t n);
+/* A stored job's @a path back into its endpoint and form: 0, or -1 when
+ * it names none served here. */
+int srv__job_route(const char *path, size_t *ep, api_form *form);
 /* Job @a id (of endpoint @a path), opened from its stored body, shared by
  * the few last used (a batch of many chunks is parsed once): the job; or
  * NULL with its problem in @a out (out->status 0: its body is gone, the

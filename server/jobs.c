@@ -201,6 +201,28 @@ static cached *cache_slot(srv__jobs *js) {
   return best;
 }
 
+/* The NDJSON form of an endpoint that answers JSON by default is kept in
+ * the job's path as the query OGC API - Common names a format with. */
+static const char NDJSON_QUERY[] = "?f=ndjson";
+
+void srv__job_path(size_t ep, api_form form, char *path, size_t n) {
+  snprintf(path, n, "%s%s", api_endpoint_at(ep)->path,
+           form == API_FORM_NDJSON ? NDJSON_QUERY : "");
+}
+
+int srv__job_route(const char *path, size_t *ep, api_form *form) {
+  char bare[32];
+  size_t n = strcspn(path, "?");
+  *form = API_FORM_DEFAULT;
+  if (path[n]) {
+    if (strcmp(path + n, NDJSON_QUERY) != 0)
+      return -1;
+    *form = API_FORM_NDJSON;
+  }
+  snprintf(bare, sizeof bare, "%.*s", (int)n, path);
+  return api_route("POST", bare, ep) == 200 ? 0 : -1;
+}
+
 api_job *srv__jobs_open(srv__jobs *js, const char *id, const char *path,
                         api_response *out) {
   memset(out, 0, sizeof *out);
@@ -231,11 +253,12 @@ api_job *srv__jobs_open(srv__jobs *js, const char *id, const char *path,
     return NULL;
   api_job *job = NULL;
   api_limits lim = srv__job_limits(js->d);
-  if (api_route("POST", path, &ep) != 200)
+  api_form form = API_FORM_DEFAULT;
+  if (srv__job_route(path, &ep, &form) != 0)
     api_problem(out, API_P_NOT_FOUND, "the job's endpoint is not served here",
                 NULL, NULL, 0);
   else
-    api_job_open(ep, body, len, &lim, &job, out);
+    api_job_open_form(ep, form, body, len, &lim, &job, out);
   free(body);
   if (!job)
     return NULL;
@@ -432,6 +455,9 @@ static void run_chunk(runner *ru, store *st, const char *id, long k) {
     return;
   }
   api_limits lim = chunk_limits(js, sj.started);
+  size_t ep = api_endpoint_count(); /* its endpoint, for the metrics */
+  api_form form;
+  srv__job_route(sj.path, &ep, &form);
   pthread_mutex_lock(&js->mu);
   ru->busy = 1;
   snprintf(ru->id, sizeof ru->id, "%s", id);
@@ -467,7 +493,8 @@ static void run_chunk(runner *ru, store *st, const char *id, long k) {
         js->d, rc,
         store_complete(st, js->owner, id, k, out.body, out.len, srv__wall()));
     if (rc == 0)
-      srv_metrics_job_chunk(js->d->metrics);
+      srv_metrics_job_chunk(js->d->metrics, ep,
+                            api_job_chunk_items(job, (size_t)k));
     else if (rc == STORE_ERROR)
       fprintf(stderr, "stickslipd: job %s chunk %ld not stored: %s\n", id, k,
               store_error(st));

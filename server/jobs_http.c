@@ -281,7 +281,8 @@ static void submit_job(srv__req *r, store *st) {
   unsigned char bytes[STORE_ID_LEN / 2];
   store_job sj;
   memset(&sj, 0, sizeof sj);
-  if (api_job_open(r->ep, r->buf ? r->buf : "", r->len, &lim, &job, &r->ar))
+  if (api_job_open_form(r->ep, (api_form)r->form, r->buf ? r->buf : "", r->len,
+                        &lim, &job, &r->ar))
     return; /* its problem, as the synchronous request would be answered */
   size_t n = api_job_chunks(job);
   if (!(chunks = calloc(n, sizeof *chunks)) ||
@@ -296,7 +297,7 @@ static void submit_job(srv__req *r, store *st) {
   }
   for (size_t i = 0; i < sizeof bytes; i++)
     snprintf(sj.id + 2 * i, 3, "%02x", bytes[i]);
-  snprintf(sj.path, sizeof sj.path, "%s", api_endpoint_at(r->ep)->path);
+  srv__job_path(r->ep, (api_form)r->form, sj.path, sizeof sj.path);
   sj.status = STORE_ACCEPTED;
   sj.created = sj.updated = srv__wall();
   sj.chunks = (long)n;

@@ -32,6 +32,7 @@ static const double BOUNDS[SRV_BUCKETS] = {
 typedef struct ep_metrics {
   atomic_ulong status[N_STATUS];
   atomic_ulong batch_status[N_STATUS]; /* items of batches on this path */
+  atomic_ulong job_items; /* items of jobs' chunks on this path stored here */
   atomic_ulong latency_ns_sum;
   atomic_ulong latency_bucket[SRV_BUCKETS + 1];
 } ep_metrics;
@@ -127,8 +128,10 @@ void srv_metrics_pool(srv_metrics *m, const srv_pool_load_t *load) {
   atomic_store(&m->clients, load->clients);
 }
 
-void srv_metrics_job_chunk(srv_metrics *m) {
+void srv_metrics_job_chunk(srv_metrics *m, size_t ep, long items) {
   atomic_fetch_add(&m->job_chunks, 1);
+  if (items > 0)
+    atomic_fetch_add(&m->ep[row(m, ep)].job_items, (unsigned long)items);
 }
 
 void srv_metrics_store(srv_metrics *m, double seconds) {
@@ -255,6 +258,17 @@ static void jobs(sbuf *s, srv_metrics *m) {
       "by this replica.\n# TYPE stickslip_job_chunks_total counter\n"
       "stickslip_job_chunks_total %lu\n",
       atomic_load(&m->job_chunks));
+  put(s, "# HELP stickslip_job_items_total Items of the chunks of jobs "
+         "computed and stored by this replica, by endpoint (a /batch's "
+         "items, the cells of a /map or a /basins, 1 for a single answer); "
+         "a /batch job's items are not in stickslip_batch_items_total.\n"
+         "# TYPE stickslip_job_items_total counter\n");
+  for (size_t e = 0; e < m->n; e++) {
+    unsigned long k = atomic_load(&m->ep[e].job_items);
+    if (k)
+      put(s, "stickslip_job_items_total{endpoint=\"%s\"} %lu\n", label(m, e),
+          k);
+  }
   put(s, "# HELP stickslip_job_store_seconds Latency of the calls to the job "
          "store.\n# TYPE stickslip_job_store_seconds histogram\n");
   histogram(s, "stickslip_job_store_seconds", "", m->store_bucket,

@@ -334,6 +334,8 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
                       NULL);
   const api_endpoint *row = api_endpoint_at(ep);
   r->ep = ep;
+  r->form = api_negotiate(ep, MHD_lookup_connection_value(
+                                  c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT));
   if (!strcmp(method, "OPTIONS")) {
     /* what the path takes; a browser's preflight (answered on the next
      * call, with CORS headers when the origin is allowed) */
@@ -428,6 +430,7 @@ static enum MHD_Result take_body(struct srv_daemon *d, srv__req *r,
 /* One request to the api, with what the daemon knows of itself. */
 static void handle(struct srv_daemon *d, srv__req *r, api_response *ar) {
   api_server_info info = srv__server_info(d, &r->job);
+  info.form = r->form;
   api_handle(r->ep, r->buf ? r->buf : "", r->len, &d->cfg.lim, &info, ar);
   if (ar->status >= 500 && ar->status != 503)
     fprintf(stderr, "stickslipd: %s %s answered %d: %.200s\n", r->method,

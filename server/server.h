@@ -168,8 +168,9 @@ long srv_metrics_in_flight(srv_metrics *m, int delta);
 void srv_metrics_batch_item(srv_metrics *m, size_t ep, int status);
 /* The pool's load, for the next srv_metrics_render. */
 void srv_metrics_pool(srv_metrics *m, const srv_pool_load_t *load);
-/* A chunk of a job computed and stored by this replica. */
-void srv_metrics_job_chunk(srv_metrics *m);
+/* A chunk of a job of endpoint @a ep (as for srv_metrics_observe), of
+ * @a items items, computed and stored by this replica. */
+void srv_metrics_job_chunk(srv_metrics *m, size_t ep, long items);
 /* A call to the job store took @a seconds. */
 void srv_metrics_store(srv_metrics *m, double seconds);
 /* The jobs by status (indexed by store_status) and the chunks pending, for

@@ -81,23 +81,51 @@ async function post(path, body) {
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 class Cancelled extends Error {}
 
+/* Each NDJSON line of the answer res, parsed, to onLine as soon as it has
+ * come whole: the body read as it streams. */
+async function eachLine(res, onLine) {
+  const reader = res.body.getReader(), dec = new TextDecoder();
+  let buf = "";
+  for (;;) {
+    const { value, done } = await reader.read();
+    buf += done ? dec.decode() : dec.decode(value, { stream: true });
+    let nl;
+    while ((nl = buf.indexOf("\n")) >= 0) {
+      const line = buf.slice(0, nl);
+      buf = buf.slice(nl + 1);
+      if (line.trim())
+        onLine(JSON.parse(line));
+    }
+    if (done)
+      break;
+  }
+  if (buf.trim())
+    onLine(JSON.parse(buf));
+}
+
 /* A long computation as a job: POST with Prefer: respond-async, the status
  * polled for its progress (progress(status) each time), the job deleted
- * when ctl.cancelled is set, and its results read when it succeeds.  A
- * daemon that answers at once (200) is taken as it answers. */
-async function job(path, body, ctl, progress) {
-  const res = await call(path, {
-    method: "POST",
-    headers: { "Content-Type": "application/json", Prefer: "respond-async" },
-    body: JSON.stringify(body),
-  });
+ * when ctl.cancelled is set.  Without onLine its results are read when it
+ * succeeds, and returned as text.  With onLine its answer is NDJSON (asked
+ * for with Accept: /basins answers JSON by default) and its results are
+ * read as they stream while the job runs, each line to onLine as it
+ * arrives (the daemon sends the lines of the chunks already stored, then
+ * each chunk's as it is stored).  A daemon that answers at once (200) is
+ * taken as it answers. */
+async function job(path, body, ctl, progress, onLine) {
+  const headers = { "Content-Type": "application/json", Prefer: "respond-async" };
+  if (onLine)
+    headers.Accept = "application/x-ndjson";
+  const res = await call(path, { method: "POST", headers, body: JSON.stringify(body) });
   if (res.status === 200)
-    return res.text();
+    return onLine ? eachLine(res, onLine) : res.text();
   if (res.status !== 201)
     throw await failure(res);
   const loc = res.headers.get("Location");
   let st = await res.json();
   ctl.location = loc;
+  if (onLine)
+    return streamJob(loc, st, ctl, progress, onLine);
   for (;;) {
     progress(st);
     if (ctl.cancelled) {
@@ -118,6 +146,49 @@ async function job(path, body, ctl, progress) {
   if (!r.ok)
     throw await failure(r);
   return r.text();
+}
+
+/* The results of job loc read as they stream, its status polled beside
+ * them for the progress bar and the cancel button; a cancel aborts the
+ * stream and deletes the job. */
+async function streamJob(loc, st, ctl, progress, onLine) {
+  const abort = new AbortController();
+  let reading = true;
+  const poll = (async () => {
+    while (reading) {
+      progress(st);
+      if (ctl.cancelled) {
+        abort.abort();
+        await call(loc, { method: "DELETE" });
+        return;
+      }
+      await sleep(250);
+      const r = await call(loc);
+      if (r.ok)
+        st = await r.json();
+    }
+  })();
+  try {
+    const res = await call(loc + "/results", { signal: abort.signal });
+    if (!res.ok)
+      throw await failure(res);
+    await eachLine(res, onLine);
+  } catch (e) {
+    if (!ctl.cancelled)
+      throw e;
+  } finally {
+    reading = false;
+    await poll;
+  }
+  if (ctl.cancelled)
+    throw new Cancelled();
+  const r = await call(loc);
+  const fin = r.ok ? await r.json() : st;
+  progress(fin);
+  if (fin.status === "dismissed")
+    throw new Cancelled();
+  if (fin.status === "failed")
+    throw await failure(await call(loc + "/results"));
 }
 
 /* ---- panels: their errors, status, staleness ----------------------------- */
@@ -756,8 +827,6 @@ async function existenceMap() {
   });
   await longWork("map", "map", async (ctl) => {
     status("map", "map: submitted");
-    const text = await job("/map", request, ctl, ctl.progress);
-    const lines = text.split("\n").filter((l) => l.trim()).map((l) => JSON.parse(l));
     const svg = $("#map");
     /* cells centred on the grid's values */
     const hx = (xr[1] - xr[0]) / (2 * (xn - 1 || 1)), hy = (yr[1] - yr[0]) / (2 * (yn - 1 || 1));
@@ -765,28 +834,40 @@ async function existenceMap() {
       x: [Math.min(xr[0], xr[1]) - Math.abs(hx), Math.max(xr[0], xr[1]) + Math.abs(hx)],
       y: [Math.min(yr[0], yr[1]) - Math.abs(hy), Math.max(yr[0], yr[1]) + Math.abs(hy)],
       exact: true, side: 100, xlabel: label(xp, "param"), ylabel: label(yp, "param"), xname: xp, yname: yp });
+    svg.setAttribute("aria-label", "existence map: each cell a button (arrow keys move between " +
+                     "cells, Enter loads the cell's orbits)");
     const cw = p.pw / xn, ch = p.ph / yn;
     const byCell = new Map();
-    const rows = [];
-    for (const l of lines) {
+    const rows = [], lines = [];
+    /* arrow keys move along the axes as they are drawn */
+    state.mapStep = { x: xr[1] >= xr[0] ? 1 : -1, y: yr[1] >= yr[0] ? 1 : -1 };
+    state.mapLines = lines;
+    /* each cell drawn as its line arrives */
+    const cell = (l) => {
+      lines.push(l);
       if (!l.index)
-        continue;
+        return;
       const k = mapClass(l);
       byCell.set(l.index[0] + "," + l.index[1], l);
       const x = p.x(l.at[xp]) - cw / 2, y = p.y(l.at[yp]) - ch / 2;
+      const orbits = l.orbits.map((q) => q.kind + " T=" + Plot.fmt(q.period) +
+                                   (q.stable ? " stable" : " unstable"));
+      const words = xp + " = " + Plot.fmt(l.at[xp]) + ", " + yp + " = " + Plot.fmt(l.at[yp]) + ": " +
+        (orbits.join("; ") || "no orbit");
+      /* a roving tabindex: one cell in the page's tab order, the arrow
+       * keys move it */
       const r = Plot.el("rect", { x: x.toFixed(2), y: y.toFixed(2), width: (cw + 0.4).toFixed(2),
                                   height: (ch + 0.4).toFixed(2), fill: MAP_KEY[k].color,
                                   class: "cell " + ["none", "unstable", "stable", "several"][k],
-                                  "data-i": l.index[0], "data-j": l.index[1] }, p.layer);
-      const orbits = l.orbits.map((q) => q.kind + " T=" + Plot.fmt(q.period) +
-                                   (q.stable ? " stable" : " unstable"));
-      Plot.el("title", {}, r).textContent = xp + " = " + Plot.fmt(l.at[xp]) + ", " + yp + " = " +
-        Plot.fmt(l.at[yp]) + ": " + (orbits.join("; ") || "no orbit");
+                                  "data-i": l.index[0], "data-j": l.index[1], role: "button",
+                                  tabindex: svg.querySelector("rect.cell") ? -1 : 0,
+                                  "aria-label": words }, p.layer);
+      Plot.el("title", {}, r).textContent = words;
       rows.push([l.at[xp], l.at[yp], l.orbits.length, l.orbits.filter((q) => q.stable).length,
                  l.orbits.map((q) => q.kind + ":" + q.period).join(" ")]);
-    }
+    };
+    await job("/map", request, ctl, ctl.progress, cell);
     state.figures.map = () => ({ columns: [xp, yp, "orbits", "stable", "kind:period"], rows });
-    state.mapLines = lines;
     /* the current parameter point */
     const cur = paramValues();
     if (cur && cur[xp] !== undefined && cur[yp] !== undefined) {
@@ -807,6 +888,31 @@ async function existenceMap() {
            f.kind.value + ", period at most " + f.max_period.value + "), " +
            done.seconds.toFixed(2) + " s");
   });
+}
+
+/* The arrow keys move the map's roving focus to the next cell along the
+ * axes; Enter or Space loads the focused cell's orbits (as a click). */
+function mapKey(evt) {
+  const r = evt.target.closest && evt.target.closest("rect.cell");
+  if (!r || !state.mapStep)
+    return;
+  if (evt.key === "Enter" || evt.key === " ") {
+    evt.preventDefault();
+    mapCell(evt);
+    return;
+  }
+  const moves = { ArrowRight: [1, 0], ArrowLeft: [-1, 0], ArrowUp: [0, 1], ArrowDown: [0, -1] };
+  const m = moves[evt.key];
+  if (!m)
+    return;
+  evt.preventDefault();
+  const i = Number(r.dataset.i) + m[0] * state.mapStep.x, j = Number(r.dataset.j) + m[1] * state.mapStep.y;
+  const next = $("#map").querySelector("rect.cell[data-i='" + i + "'][data-j='" + j + "']");
+  if (next) {
+    r.setAttribute("tabindex", "-1");
+    next.setAttribute("tabindex", "0");
+    next.focus();
+  }
 }
 
 /* A map cell clicked: its parameters in the form, and its orbits found. */
@@ -841,41 +947,70 @@ async function basins() {
   });
   await longWork("basins", "basins", async (ctl) => {
     status("basins", "basins: submitted");
-    const ans = JSON.parse(await job("/basins", request, ctl, ctl.progress));
-    const L = ans.labels, bytes = atob(L.data);
-    const hx = (xr[1] - xr[0]) / (2 * (L.rows - 1 || 1)), hy = (yr[1] - yr[0]) / (2 * (L.cols - 1 || 1));
-    const p = Plot.frame($("#basins"), { x: [xr[0] - hx, xr[1] + hx], y: [yr[0] - hy, yr[1] + hy],
-                                         exact: true, side: 150, xlabel: label("x1", "x"),
-                                         ylabel: label("x2", "x"), xname: "x1", yname: "x2" });
+    const hx = (xr[1] - xr[0]) / (2 * (n - 1 || 1)), hy = (yr[1] - yr[0]) / (2 * (n - 1 || 1));
+    const svg = $("#basins");
+    const p = Plot.frame(svg, { x: [xr[0] - hx, xr[1] + hx], y: [yr[0] - hy, yr[1] + hy],
+                                exact: true, side: 150, xlabel: label("x1", "x"),
+                                ylabel: label("x2", "x"), xname: "x1", yname: "x2" });
+    /* the NDJSON form: the head (the slice and the search's attractors),
+     * each group of rows drawn as it arrives, then the last line (every
+     * attractor, its counts, and the cells it relabels) */
+    let L = null, labels = null, attractors = [], image = null, g = null, img = null, c = null;
+    let painted = 0;
     const fill = (b) => (b === L.unresolved ? "#dddddd" : b === L.perpetual_slip ? "#999999"
                          : color(b));
-    /* one pixel a cell, drawn as an image: row i runs along x1, column j
-     * along x2 (up) */
-    const c = document.createElement("canvas");
-    c.width = L.rows;
-    c.height = L.cols;
-    const g = c.getContext("2d"), img = g.createImageData(L.rows, L.cols);
-    const counts = new Map();
-    for (let i = 0; i < L.rows; i++)
-      for (let j = 0; j < L.cols; j++) {
-        const b = bytes.charCodeAt(i * L.cols + j), hex = fill(b);
-        counts.set(b, (counts.get(b) || 0) + 1);
-        const o = 4 * ((L.cols - 1 - j) * L.rows + i);
-        img.data[o] = parseInt(hex.slice(1, 3), 16);
-        img.data[o + 1] = parseInt(hex.slice(3, 5), 16);
-        img.data[o + 2] = parseInt(hex.slice(5, 7), 16);
-        img.data[o + 3] = 255;
+    /* one pixel a cell: row i runs along x1, column j along x2 (up) */
+    const paint = (from, to) => {
+      for (let i = from; i < to; i++)
+        for (let j = 0; j < L.cols; j++) {
+          const hex = fill(labels[i * L.cols + j]), o = 4 * ((L.cols - 1 - j) * L.rows + i);
+          img.data[o] = parseInt(hex.slice(1, 3), 16);
+          img.data[o + 1] = parseInt(hex.slice(3, 5), 16);
+          img.data[o + 2] = parseInt(hex.slice(5, 7), 16);
+          img.data[o + 3] = 255;
+        }
+      g.putImageData(img, 0, 0);
+      image.setAttribute("href", c.toDataURL());
+    };
+    const line = (l) => {
+      if (l.attractors && !l.done) {
+        L = l.labels;
+        attractors = l.attractors;
+        labels = new Uint8Array(L.rows * L.cols).fill(L.unresolved);
+        c = document.createElement("canvas");
+        c.width = L.rows;
+        c.height = L.cols;
+        g = c.getContext("2d");
+        img = g.createImageData(L.rows, L.cols);
+        image = Plot.el("image", { x: p.pad.left, y: p.pad.top, width: p.pw, height: p.ph,
+                                   preserveAspectRatio: "none", "image-rendering": "pixelated",
+                                   class: "basin" }, p.layer);
+        svg.dataset.rows = L.rows;
+      } else if (l.row !== undefined) {
+        const bytes = atob(l.labels), at = l.row * L.cols;
+        for (let k = 0; k < bytes.length; k++)
+          labels[at + k] = bytes.charCodeAt(k);
+        paint(l.row, l.row + l.rows);
+        painted += l.rows;
+        svg.dataset.painted = painted;
+      } else if (l.done) {
+        attractors = l.attractors;
+        for (const [cell, count, b] of l.relabelled)
+          labels.fill(b, cell, cell + count);
+        paint(0, L.rows);
+        state.basinsAnswer = l;
       }
-    g.putImageData(img, 0, 0);
-    Plot.el("image", { x: p.pad.left, y: p.pad.top, width: p.pw, height: p.ph, href: c.toDataURL(),
-                       preserveAspectRatio: "none", "image-rendering": "pixelated",
-                       class: "basin" }, p.layer);
+    };
+    await job("/basins", request, ctl, ctl.progress, line);
+    const counts = new Map();
+    for (const b of labels)
+      counts.set(b, (counts.get(b) || 0) + 1);
     const name = (b) => {
-      const a = ans.attractors.find((q) => q.label === b);
+      const a = attractors.find((q) => q.label === b);
       return a ? a.kind + " T=" + Plot.fmt(a.period) : b === L.unresolved ? "unresolved"
         : b === L.perpetual_slip ? "perpetual slip" : "label " + b;
     };
-    const entries = ans.attractors.map((a) => ({
+    const entries = attractors.map((a) => ({
       label: a.kind + " " + (100 * a.fraction).toFixed(1) + " %",
       color: color(a.label), mark: "box" }));
     if (counts.has(L.unresolved))
@@ -886,18 +1021,17 @@ async function basins() {
     Plot.readout(p, (x, y) => {
       const i = Math.round((x - xr[0]) / ((xr[1] - xr[0]) / (L.rows - 1 || 1)));
       const j = Math.round((y - yr[0]) / ((yr[1] - yr[0]) / (L.cols - 1 || 1)));
-      return i >= 0 && j >= 0 && i < L.rows && j < L.cols ? name(bytes.charCodeAt(i * L.cols + j)) : "";
+      return i >= 0 && j >= 0 && i < L.rows && j < L.cols ? name(labels[i * L.cols + j]) : "";
     });
     state.figures.basins = () => {
       const rows = [];
       for (let i = 0; i < L.rows; i++)
         for (let j = 0; j < L.cols; j++)
-          rows.push([xr[0] + i * 2 * hx, yr[0] + j * 2 * hy, name(bytes.charCodeAt(i * L.cols + j))]);
+          rows.push([xr[0] + i * 2 * hx, yr[0] + j * 2 * hy, name(labels[i * L.cols + j])]);
       return { columns: ["x1", "x2", "attractor"], rows };
     };
-    state.basinsAnswer = ans;
-    const legend = ans.attractors.map((a) => a.kind + " " + (100 * a.fraction).toFixed(1) + " %");
-    status("basins", "basins: " + ans.attractors.length + " attractor(s): " + legend.join(", "));
+    const legend = attractors.map((a) => a.kind + " " + (100 * a.fraction).toFixed(1) + " %");
+    status("basins", "basins: " + attractors.length + " attractor(s): " + legend.join(", "));
   });
 }
 
@@ -979,6 +1113,7 @@ $("#simulate-form").addEventListener("submit", (e) => {
 $("#portrait2").addEventListener("click", (e) => clickSimulate(e, 2));
 $("#portrait1").addEventListener("click", (e) => clickSimulate(e, 1));
 $("#map").addEventListener("click", mapCell);
+$("#map").addEventListener("keydown", mapKey);
 for (const [id, run] of [["continue-form", continueFamily], ["map-form", existenceMap],
                          ["basins-form", basins]])
   $("#" + id).addEventListener("submit", (e) => {

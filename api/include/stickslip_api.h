@@ -136,7 +136,23 @@ typedef struct api_server_info {
    *  samples, a /stability); any other is left: api_handle answers status
    *  0, @a out empty, for the server to run where long work runs. */
   int small_only;
+  /** The form of the answer the client asked for (api_negotiate). */
+  int form;
 } api_server_info;
+
+/** The forms of an answer: the endpoint's own (JSON; NDJSON for /map and
+ *  /batch), or NDJSON for an endpoint that answers in it besides JSON
+ *  (POST /basins: its rows as they are done, then its summary). */
+typedef enum api_form { API_FORM_DEFAULT = 0, API_FORM_NDJSON = 1 } api_form;
+
+/**
+ * The form in which endpoint @a index answers a client whose Accept header
+ * is @a accept (NULL: none): API_FORM_NDJSON when the endpoint has that
+ * form besides JSON and @a accept names application/x-ndjson with a
+ * quality above 0 and above that of application/json; otherwise
+ * API_FORM_DEFAULT (JSON stays the default).
+ */
+api_form api_negotiate(size_t index, const char *accept);
 
 /**
  * Serve endpoint @a index: for API_RUN_COMPUTE, parse, validate, compute and
@@ -224,8 +240,10 @@ void api_batch_free(api_batch *b);
  * items (each chunk: their lines), and a last chunk writes the done line;
  * a /map's full searches of its lattice are cut in groups, and a last
  * chunk spreads them and writes the answer; a /basins' rows of cells are
- * cut in groups.  Progress is told in items: batch items, map or basin
- * cells (api_job_items).
+ * cut in groups (in its NDJSON form, api_job_open_form, each group's
+ * result is a line of the answer, so its results grow as they are
+ * stored).  Progress is told in items: batch items, map or basin cells
+ * (api_job_items).
  */
 typedef struct api_job api_job;
 
@@ -237,6 +255,10 @@ typedef struct api_job api_job;
  */
 int api_job_open(size_t index, const char *body, size_t len,
                  const api_limits *lim, api_job **j, api_response *out);
+/** api_job_open for an answer in @a form (api_negotiate): the same cuts
+ *  for API_FORM_DEFAULT; an endpoint's other form is cut its own way. */
+int api_job_open_form(size_t index, api_form form, const char *body, size_t len,
+                      const api_limits *lim, api_job **j, api_response *out);
 /** Free a job; NULL-safe. */
 void api_job_free(api_job *j);
 /** The number of chunks (at least 1). */

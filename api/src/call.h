@@ -21,6 +21,7 @@ typedef struct api_call {
   /* may be NULL; set to 1 by a decode whose work is small and bounded
    * (api_server_info.small_only) */
   int *small;
+  api_form form; /* the form of the answer asked for (api_negotiate) */
 } api_call;
 
 /* The threads a /map or a /basins runs on: --map-threads, no more than the

@@ -4,6 +4,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
+#include <strings.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -33,6 +34,61 @@ size_t api_endpoint_count(void) { return N_ENDPOINTS; }
 
 const api_endpoint *api_endpoint_at(size_t i) {
   return i < N_ENDPOINTS ? &ENDPOINTS[i].pub : NULL;
+}
+
+/* The index of each endpoint, in the order of the one list. */
+enum {
+#define EP_INDEX(name, method, path, label, cls, dec, run, enc, rel) EP_##name,
+  API_ENDPOINTS(EP_INDEX)
+#undef EP_INDEX
+      EP_COUNT
+};
+
+/* The quality (RFC 9110 12.4.2) an Accept header @a accept gives the media
+ * type @a type when it names it; -1 when it does not.  Ranges (* / *) are
+ * not counted: they accept the default form. */
+static double quality(const char *accept, const char *type) {
+  size_t n = strlen(type);
+  double q = -1;
+  for (const char *s = accept; s && *s;
+       s = strchr(s, ',') ? strchr(s, ',') + 1 : NULL) {
+    while (*s == ' ' || *s == '\t')
+      s++;
+    const char *end = s + strcspn(s, ",;");
+    while (end > s && (end[-1] == ' ' || end[-1] == '\t'))
+      end--;
+    if ((size_t)(end - s) != n || strncasecmp(s, type, n) != 0)
+      continue;
+    double v = 1;
+    const char *param = s + strcspn(s, ",;");
+    while (*param == ';') {
+      param++;
+      while (*param == ' ')
+        param++;
+      if ((param[0] == 'q' || param[0] == 'Q') && param[1] == '=')
+        v = strtod(param + 2, NULL);
+      param += strcspn(param, ",;");
+    }
+    if (v > q)
+      q = v;
+  }
+  return q;
+}
+
+api_form api_negotiate(size_t index, const char *accept) {
+  static const size_t FORMS[] = {
+#define EP_NDJSON_FORM(name) EP_##name,
+      API_NDJSON_FORMS(EP_NDJSON_FORM)
+#undef EP_NDJSON_FORM
+  };
+  int has = 0;
+  for (size_t i = 0; i < sizeof FORMS / sizeof FORMS[0]; i++)
+    has |= FORMS[i] == index;
+  if (!has || !accept)
+    return API_FORM_DEFAULT;
+  double nd = quality(accept, "application/x-ndjson");
+  return nd > 0 && nd > quality(accept, "application/json") ? API_FORM_NDJSON
+                                                            : API_FORM_DEFAULT;
 }
 
 int api_route(const char *method, const char *path, size_t *index) {
@@ -138,7 +194,8 @@ int api__handle(size_t index, const char *body, size_t len,
   api_err e;
   api_lazies lz = {NULL, 0, 0, 0};
   int small = 0;
-  api_call c = {lim, srv, &e, &lz, &small};
+  api_call c = {lim, srv, &e, &lz, &small,
+                srv ? (api_form)srv->form : API_FORM_DEFAULT};
   json_t *root = NULL;
   void *x = NULL;
   memset(&e, 0, sizeof e);

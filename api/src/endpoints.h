@@ -67,6 +67,11 @@
     API_RUN_INLINE, ep_meta_decode, ep_meta_run, ep_explorer_css_encode,       \
     ep_meta_release)
 
+/* The endpoints that also answer in NDJSON (API_FORM_NDJSON), when the
+ * client's Accept asks for it: their decode reads the form from
+ * api_call.form. */
+#define API_NDJSON_FORMS(X) X(BASINS)
+
 typedef int ep_decode_fn(const json_t *root, const api_call *c, void **x);
 typedef int ep_run_fn(void *x, const api_call *c);
 typedef int ep_encode_fn(const void *x, const api_call *c, api_response *out);

@@ -2,12 +2,35 @@
  * ep_basins.c: POST /basins, the attractors of one parameter set and the
  * basin of each over a two-dimensional slice of initial states
  * (ss_basins_run); the labels as a base64 byte array, row-major.
+ *
+ * Its other form, NDJSON (API_FORM_NDJSON, asked with Accept:
+ * application/x-ndjson), is the map in the order the core's stages make
+ * it, one line each:
+ *   the head     {"labels": {rows, cols, encoding, unresolved,
+ *                perpetual_slip}, "attractors": [...]}: the slice and the
+ *                attractors of the orbit search (stage 0), without counts;
+ *   a group of rows, from the first  {"row", "rows", "labels": base64 of
+ *                their labels, "returns", "max_to_land"}: the labels of
+ *                stage 1, final for every cell labelled with an attractor;
+ *                a cell labelled unresolved (255) may still land on an
+ *                attractor found by simulation;
+ *   the last     {"done": true, "attractors": all of them, with their
+ *                counts, "relabelled": [[cell, count, label], ...], the
+ *                shares and returns of the JSON form, its input, units and
+ *                version}: each run of consecutive cells (row-major index
+ *                of the first, how many) whose label stage 2 changed, and
+ *                the label they now have.
+ * The rows' lines and the runs give the JSON form's labels exactly.  As a
+ * job (below) each line is the result of a chunk, so its results stream
+ * the rows as they are stored.
  */
+#define _POSIX_C_SOURCE 200809L
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "endpoints.h"
 #include "decode.h"
@@ -46,6 +69,9 @@ typedef struct basins_x {
   ss_basin_opts opts;
   /* the answer */
   ss_basins b;
+  int ndjson;                 /* its form: lines (API_FORM_NDJSON) */
+  api_wbuf lines;             /* of that form, the head and the rows' lines */
+  unsigned char *provisional; /* the labels of stage 1, before stage 2 */
 } basins_x;
 
 static const api_field AXIS_FIELDS[] = {
@@ -170,6 +196,7 @@ int ep_basins_decode(const json_t *root, const api_call *c, void **xp) {
     return -1;
   x->max_period = 4;
   x->max_returns = 500;
+  x->ndjson = c->form == API_FORM_NDJSON;
   if (api__decode_request(&SPEC, root, x, &x->ap, c))
     return -1;
   /* the state: exactly the two variables the axes leave */
@@ -223,8 +250,12 @@ static int basins_problem(int rc, const ss_diag *d, const api_call *c) {
   return 0;
 }
 
+static int run_lines(basins_x *x, const api_call *c);
+
 int ep_basins_run(void *xp, const api_call *c) {
   basins_x *x = xp;
+  if (x->ndjson)
+    return run_lines(x, c);
   ss_diag d;
   ss_diag_clear(&d);
   return basins_problem(ss_basins_run(&x->m, &x->opts, &x->b, &d), &d, c);
@@ -264,8 +295,11 @@ static json_t *share(long cells, double total) {
   return o;
 }
 
-static json_t *attractor_json(const basins_x *x, int i, double total) {
-  const ss_basin_attractor *a = &x->b.attractors[i];
+/* Attractor @a i of @a b as the answer writes it; its cells and fraction
+ * only when @a counted (after stage 2). */
+static json_t *attractor_json(const basins_x *x, const ss_basins *b, int i,
+                              double total, int counted) {
+  const ss_basin_attractor *a = &b->attractors[i];
   const ss_orbit *o = &a->orbit;
   const api_params *ap = &x->ap;
   json_t *j = json_object(), *sec = json_array();
@@ -288,39 +322,138 @@ static json_t *attractor_json(const basins_x *x, int i, double total) {
   api__set(j, "section", sec);
   api__set(j, "radius", api__real(a->radius));
   api__set(j, "iterations", json_integer(a->iterations));
-  api__set(j, "cells", json_integer(a->cells));
-  api__set(j, "fraction", api__real((double)a->cells / total));
+  if (counted) {
+    api__set(j, "cells", json_integer(a->cells));
+    api__set(j, "fraction", api__real((double)a->cells / total));
+  }
   return j;
 }
 
-int ep_basins_encode(const void *xp, const api_call *c, api_response *out) {
-  const basins_x *x = xp;
-  const ss_basins *b = &x->b;
+/* The attractors of @a b as an array (see attractor_json). */
+static json_t *attractors_json(const basins_x *x, const ss_basins *b,
+                               int counted) {
   double total = (double)b->n[0] * (double)b->n[1];
-  json_t *o = json_object(), *arr = json_array(), *lab = json_object();
+  json_t *arr = json_array();
   for (int i = 0; i < b->n_attractors; i++)
-    json_array_append_new(arr, attractor_json(x, i, total));
-  api__set(o, "attractors", arr);
-  char *data = base64(b->labels, (size_t)total);
-  if (!data) {
-    json_decref(o);
-    json_decref(lab);
-    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
-  }
+    json_array_append_new(arr, attractor_json(x, b, i, total, counted));
+  return arr;
+}
+
+/* The labels' description: the slice's shape, the labels themselves when
+ * @a data is not NULL (their base64), and the labels that are not an
+ * attractor's. */
+static json_t *labels_json(const ss_basins *b, const char *data) {
+  json_t *lab = json_object();
   api__set(lab, "rows", json_integer(b->n[0]));
   api__set(lab, "cols", json_integer(b->n[1]));
   api__set(lab, "encoding", json_string("base64"));
-  api__set(lab, "data", json_string(data));
+  if (data)
+    api__set(lab, "data", json_string(data));
   api__set(lab, "unresolved", json_integer(SS_BASIN_UNRESOLVED));
   api__set(lab, "perpetual_slip", json_integer(SS_BASIN_PERPETUAL));
-  free(data);
-  api__set(o, "labels", lab);
+  return lab;
+}
+
+/* What both forms end with, set on @a o: the attractors with their counts
+ * (in the place of a key "attractors" @a o has already, if it has one),
+ * the unresolved and perpetual shares, the returns. */
+static void summary(const basins_x *x, json_t *o) {
+  const ss_basins *b = &x->b;
+  double total = (double)b->n[0] * (double)b->n[1];
+  api__set(o, "attractors", attractors_json(x, b, 1));
   api__set(o, "unresolved", share(b->unresolved, total));
   api__set(o, "perpetual_slip", share(b->perpetual, total));
   json_t *ret = json_object();
   api__set(ret, "total", json_integer(b->returns));
   api__set(ret, "max_to_land", json_integer(b->max_returns));
   api__set(o, "returns", ret);
+}
+
+/* The relabelled runs of the last line: each run of consecutive cells
+ * whose label is @a after and not @a before, as [first, count, label]. */
+static json_t *relabelled(const unsigned char *before,
+                          const unsigned char *after, size_t n) {
+  json_t *runs = json_array();
+  for (size_t i = 0; runs && i < n;) {
+    size_t j = i + 1;
+    if (before[i] == after[i]) {
+      i++;
+      continue;
+    }
+    while (j < n && before[j] != after[j] && after[j] == after[i])
+      j++;
+    json_t *run = json_array();
+    json_array_append_new(run, json_integer((json_int_t)i));
+    json_array_append_new(run, json_integer((json_int_t)(j - i)));
+    json_array_append_new(run, json_integer(after[i]));
+    if (json_array_append_new(runs, run)) {
+      json_decref(runs);
+      runs = NULL;
+    }
+    i = j;
+  }
+  return runs;
+}
+
+/* The last line of the NDJSON form: the map @a x holds, finished, against
+ * the labels of stage 1 @a before; a body that ends with a newline. */
+static int last_line(const basins_x *x, const unsigned char *before,
+                     const api_call *c, api_response *out) {
+  const ss_basins *b = &x->b;
+  json_t *o = json_object();
+  api__set(o, "done", json_true());
+  api__set(o, "attractors", json_null());
+  api__set(o, "relabelled",
+           relabelled(before, b->labels, (size_t)b->n[0] * (size_t)b->n[1]));
+  summary(x, o);
+  if (api__answer(o, &SPEC, x, &x->ap, c, out))
+    return -1;
+  char *body = out->body ? realloc(out->body, out->len + 2) : NULL;
+  if (!body)
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  body[out->len++] = '\n';
+  body[out->len] = 0;
+  out->body = body;
+  out->held = out->len;
+  out->content_type = "application/x-ndjson";
+  return 0;
+}
+
+int ep_basins_encode(const void *xp, const api_call *c, api_response *out) {
+  const basins_x *x = xp;
+  const ss_basins *b = &x->b;
+  if (x->ndjson) {
+    api_response last;
+    memset(&last, 0, sizeof last);
+    if (x->lines.oom || last_line(x, x->provisional, c, &last))
+      goto oom;
+    char *body = malloc(x->lines.len + last.len + 1);
+    if (!body) {
+      api_response_free(&last);
+      goto oom;
+    }
+    memcpy(body, x->lines.p, x->lines.len);
+    memcpy(body + x->lines.len, last.body, last.len + 1);
+    *out = last;
+    out->body = body;
+    out->len = out->held = x->lines.len + last.len;
+    free(last.body);
+    return 0;
+  oom:
+    return c->e->set
+               ? -1
+               : api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  }
+  json_t *o = json_object();
+  char *data = base64(b->labels, (size_t)b->n[0] * (size_t)b->n[1]);
+  if (!data) {
+    json_decref(o);
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  }
+  api__set(o, "attractors", json_null());
+  api__set(o, "labels", labels_json(b, data));
+  free(data);
+  summary(x, o);
   return api__answer(o, &SPEC, x, &x->ap, c, out);
 }
 
@@ -329,6 +462,8 @@ void ep_basins_release(void *xp) {
   if (!x)
     return;
   ss_basins_free(&x->b);
+  free(x->lines.p);
+  free(x->provisional);
   free(x);
 }
 
@@ -343,7 +478,11 @@ void ep_basins_release(void *xp) {
  *            returns one of its cells took to land;
  *   stage 2  one visible chunk: the map gathered from them, finished
  *            (ss_basins_finish) and written as the synchronous answer.
- * Items are cells, counted by the chunks of stage 1.
+ * Items are cells, counted by the chunks of stage 1.  The NDJSON form is
+ * cut so that each of its lines is the result of a chunk, in order: stage
+ * 1 begins with a chunk that writes the head line from stage 0's
+ * attractors, its groups are visible (their results are the rows' lines),
+ * and stage 2 writes the last line.
  *
  * The attractors go from stage 0 to the others as the core holds them:
  * their bytes, in base64, under the library's version and the size of
@@ -374,19 +513,30 @@ static size_t groups_of(const basins_x *x) {
 
 int ep_basins_job_cut(const void *xp, const api_call *c, api_job_cut *cut) {
   const basins_x *x = xp;
-  size_t groups = groups_of(x);
+  size_t groups = groups_of(x), head = x->ndjson ? 1 : 0;
   long long per = rows_per_chunk(x), n0 = x->axes.a[0].n;
-  if (api__job_cut_alloc(cut, groups + 2, c) != 0)
+  if (api__job_cut_alloc(cut, groups + head + 2, c) != 0)
     return -1;
+  for (size_t k = 1; k <= groups + head; k++) {
+    cut->stage[k] = 1;
+    cut->visible[k] = (unsigned char)head; /* the lines of the NDJSON form */
+  }
   for (size_t g = 0; g < groups; g++) {
     long long row = (long long)g * per;
-    cut->stage[g + 1] = 1;
-    cut->items[g + 1] =
+    cut->items[g + head + 1] =
         (long)((row + per <= n0 ? per : n0 - row) * x->axes.a[1].n);
   }
-  cut->stage[groups + 1] = 2;
-  cut->visible[groups + 1] = 1;
+  cut->stage[groups + head + 1] = 2;
+  cut->visible[groups + head + 1] = 1;
   return 0;
+}
+
+/* A copy of @a n bytes at @a p (malloc'd); NULL when out of memory. */
+static unsigned char *memdup(const unsigned char *p, size_t n) {
+  unsigned char *q = malloc(n ? n : 1);
+  if (q)
+    memcpy(q, p, n);
+  return q;
 }
 
 /* RFC 4648 base64 @a s (@a n characters) into exactly @a want bytes at
@@ -461,16 +611,35 @@ static int read_doc(const api_job_inputs *in, size_t k, const api_call *c,
                           "the stored result of chunk %zu is not JSON", k);
 }
 
-/* A 200 result, the compact text of @a doc (consumed). */
-static int result_of(json_t *doc, const api_call *c, api_response *out) {
-  size_t len = 0;
-  char *text = doc ? api__dump(doc, &len) : NULL;
+/* The compact text of @a doc (consumed), followed by a newline when it is
+ * a @a line of the NDJSON form: malloc'd, its length in *len; NULL when
+ * out of memory. */
+static char *text_of(json_t *doc, int line, size_t *len) {
+  char *text = doc ? api__dump(doc, len) : NULL;
   json_decref(doc);
+  char *more = text && line ? realloc(text, *len + 2) : text;
+  if (!more) {
+    free(text);
+    return NULL;
+  }
+  if (line) {
+    more[(*len)++] = '\n';
+    more[*len] = 0;
+  }
+  return more;
+}
+
+/* A 200 result, the compact text of @a doc (consumed), a @a line of the
+ * NDJSON form or not. */
+static int result_of(json_t *doc, int line, const api_call *c,
+                     api_response *out) {
+  size_t len = 0;
+  char *text = text_of(doc, line, &len);
   if (!text)
     return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL,
                      "the chunk's result could not be written: out of memory");
   out->status = 200;
-  out->content_type = "application/json";
+  out->content_type = line ? "application/x-ndjson" : "application/json";
   out->body = text;
   out->len = len;
   out->held = len;
@@ -512,7 +681,7 @@ static int run_attractors(const basins_x *x, const api_call *c,
     doc = NULL;
   }
   ss_basins_free(&b);
-  return result_of(doc, c, out);
+  return result_of(doc, 0, c, out);
 }
 
 /* The map of @a o with stage 0's attractors read back: 0, or -1 and the
@@ -545,13 +714,50 @@ static int read_attractors(const ss_basin_opts *o, const api_job_inputs *in,
   return 0;
 }
 
-/* Stage 1, group @a g: {"row", "rows", "returns", "max_to_land",
- * "labels": base64 of the rows' labels}. */
+/* The head line of the NDJSON form: the slice, and the attractors @a b
+ * holds after stage 0. */
+static json_t *head_doc(const basins_x *x, const ss_basins *b) {
+  json_t *doc = json_object();
+  api__set(doc, "labels", labels_json(b, NULL));
+  api__set(doc, "attractors", attractors_json(x, b, 0));
+  return doc;
+}
+
+/* The result of a group of rows, a line of the NDJSON form:
+ * {"row", "rows", "returns", "max_to_land", "labels": base64 of the
+ * labels of those rows of @a b}; NULL when out of memory. */
+static json_t *rows_doc(const ss_basins *b, long long row, long long rows,
+                        long returns, int most) {
+  size_t width = (size_t)b->n[1];
+  json_t *doc = json_object();
+  if (doc && (api__set(doc, "row", json_integer(row)) ||
+              api__set(doc, "rows", json_integer(rows)) ||
+              api__set(doc, "returns", json_integer(returns)) ||
+              api__set(doc, "max_to_land", json_integer(most)) ||
+              api__set(doc, "labels",
+                       base64_json(b->labels + (size_t)row * width,
+                                   (size_t)rows * width)))) {
+    json_decref(doc);
+    doc = NULL;
+  }
+  return doc;
+}
+
+/* Stage 1 of the NDJSON form, its first chunk: the head line. */
+static int run_head(const basins_x *x, const api_job_inputs *in,
+                    const api_call *c, api_response *out) {
+  ss_basins b;
+  int rc = read_attractors(&x->opts, in, c, &b);
+  json_t *doc = rc ? NULL : head_doc(x, &b);
+  ss_basins_free(&b);
+  return rc ? -1 : result_of(doc, 1, c, out);
+}
+
+/* Stage 1, group @a g: rows_doc, a line of the NDJSON form. */
 static int run_rows(const basins_x *x, size_t g, const api_job_inputs *in,
                     const api_call *c, api_response *out) {
   long long per = rows_per_chunk(x), n0 = x->axes.a[0].n;
   long long row = (long long)g * per, rows = row + per <= n0 ? per : n0 - row;
-  size_t width = (size_t)x->axes.a[1].n;
   ss_basin_opts o = x->opts;
   ss_basins b;
   ss_diag d;
@@ -566,19 +772,9 @@ static int run_rows(const basins_x *x, size_t g, const api_job_inputs *in,
     ss_basins_free(&b);
     return -1;
   }
-  json_t *doc = json_object();
-  if (doc && (api__set(doc, "row", json_integer(row)) ||
-              api__set(doc, "rows", json_integer(rows)) ||
-              api__set(doc, "returns", json_integer(b.returns)) ||
-              api__set(doc, "max_to_land", json_integer(b.max_returns)) ||
-              api__set(doc, "labels",
-                       base64_json(b.labels + (size_t)row * width,
-                                   (size_t)rows * width)))) {
-    json_decref(doc);
-    doc = NULL;
-  }
+  json_t *doc = rows_doc(&b, row, rows, b.returns, b.max_returns);
   ss_basins_free(&b);
-  return result_of(doc, c, out);
+  return result_of(doc, x->ndjson, c, out);
 }
 
 /* Stage 2: the map gathered from the groups of stage 1, finished, and
@@ -587,6 +783,8 @@ static int run_last(const basins_x *x, const api_job_inputs *in,
                     const api_call *c, api_response *out) {
   long long per = rows_per_chunk(x), n0 = x->axes.a[0].n;
   size_t groups = groups_of(x), width = (size_t)x->axes.a[1].n;
+  size_t first = x->ndjson ? 2 : 1; /* the chunk of the first group */
+  unsigned char *before = NULL;
   basins_x *y = malloc(sizeof *y);
   ss_diag d;
   ss_diag_clear(&d);
@@ -599,7 +797,7 @@ static int run_last(const basins_x *x, const api_job_inputs *in,
     long long row = (long long)g * per, rows = row + per <= n0 ? per : n0 - row;
     long long r0 = -1, r1 = -1, returns = 0, most = 0;
     json_t *doc = NULL;
-    if ((rc = read_doc(in, g + 1, c, &doc)))
+    if ((rc = read_doc(in, g + first, c, &doc)))
       break;
     int ok = int_of(doc, "row", 0, n0, &r0) && r0 == row &&
              int_of(doc, "rows", 0, n0, &r1) && r1 == rows &&
@@ -612,17 +810,21 @@ static int run_last(const basins_x *x, const api_job_inputs *in,
       rc = api__fail(c->e, API_P_INTERNAL, NULL,
                      "the stored result of chunk %zu is not the labels of "
                      "rows %lld to %lld",
-                     g + 1, row, row + rows - 1);
+                     g + first, row, row + rows - 1);
       break;
     }
     y->b.returns += (long)returns;
     if (most > y->b.max_returns)
       y->b.max_returns = (int)most;
   }
+  if (rc == 0 && x->ndjson &&
+      !(before = memdup(y->b.labels, (size_t)n0 * width)))
+    rc = api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
   if (rc == 0)
     rc = basins_problem(ss_basins_finish(&y->m, &y->opts, &y->b, &d), &d, c);
   if (rc == 0)
-    rc = ep_basins_encode(y, c, out);
+    rc = x->ndjson ? last_line(y, before, c, out) : ep_basins_encode(y, c, out);
+  free(before);
   ss_basins_free(&y->b);
   free(y);
   return rc;
@@ -631,10 +833,78 @@ static int run_last(const basins_x *x, const api_job_inputs *in,
 int ep_basins_job_run(const void *xp, size_t k, const api_job_inputs *in,
                       const api_call *c, api_response *out) {
   const basins_x *x = xp;
-  size_t groups = groups_of(x);
+  size_t groups = groups_of(x), head = x->ndjson ? 1 : 0;
   if (k == 0)
     return run_attractors(x, c, out);
-  if (k <= groups)
-    return run_rows(x, k - 1, in, c, out);
+  if (head && k == 1)
+    return run_head(x, in, c, out);
+  if (k <= groups + head)
+    return run_rows(x, k - 1 - head, in, c, out);
   return run_last(x, in, c, out);
+}
+
+/* ---- the NDJSON form, synchronous -----------------------------------------
+ *
+ * The same stages and the same lines as the job's chunks: the attractors
+ * and the head line, each group of rows (returns and the most returns to
+ * land counted per group) and its line, then stage 2.  The whole runs
+ * under the request's one budget: each stage has what is left of it.
+ */
+
+static double seconds_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* The budget left at a stage's start into @a o: 0 (none, or time left),
+ * or SS_ELIMIT_TIME when it is spent. */
+static int budget_left(double t0, const api_call *c, ss_basin_opts *o) {
+  double limit = c->lim->max_seconds, left = limit - (seconds_now() - t0);
+  o->max_seconds = limit > 0 ? left : 0;
+  return limit > 0 && !(left > 0) ? SS_ELIMIT_TIME : SS_OK;
+}
+
+/* Append @a doc (consumed) to the lines of @a x as a line. */
+static void append_line(basins_x *x, json_t *doc) {
+  size_t len = 0;
+  char *text = text_of(doc, 1, &len);
+  if (!text)
+    x->lines.oom = 1;
+  else
+    api__w_put(&x->lines, text, len);
+  free(text);
+}
+
+static int run_lines(basins_x *x, const api_call *c) {
+  long long per = rows_per_chunk(x), n0 = x->axes.a[0].n;
+  size_t groups = groups_of(x), cells = (size_t)n0 * (size_t)x->axes.a[1].n;
+  ss_basin_opts o = x->opts;
+  ss_basins *b = &x->b;
+  ss_diag d;
+  ss_diag_clear(&d);
+  double t0 = seconds_now();
+  int rc = ss_basins_alloc(&o, b, &d);
+  if (rc == SS_OK && (rc = budget_left(t0, c, &o)) == SS_OK &&
+      (rc = ss_basins_attractors(&x->m, &o, b, &d)) == SS_OK)
+    append_line(x, head_doc(x, b));
+  long returns = 0;
+  int most = 0;
+  for (size_t g = 0; rc == SS_OK && g < groups; g++) {
+    long long row = (long long)g * per, rows = row + per <= n0 ? per : n0 - row;
+    b->returns = 0;
+    b->max_returns = 0;
+    if ((rc = budget_left(t0, c, &o)) == SS_OK &&
+        (rc = ss_basins_rows(&x->m, &o, b, (int)row, (int)rows, &d)) == SS_OK)
+      append_line(x, rows_doc(b, row, rows, b->returns, b->max_returns));
+    returns += b->returns;
+    most = b->max_returns > most ? b->max_returns : most;
+  }
+  b->returns = returns;
+  b->max_returns = most;
+  if (rc == SS_OK && !(x->provisional = memdup(b->labels, cells)))
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  if (rc == SS_OK && (rc = budget_left(t0, c, &o)) == SS_OK)
+    rc = ss_basins_finish(&x->m, &o, b, &d);
+  return basins_problem(rc, &d, c);
 }

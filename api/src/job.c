@@ -55,8 +55,9 @@ static const struct {
 
 /*
  * The endpoints that cut their jobs: one row each, the endpoint's name in
- * API_ENDPOINTS, its cut and run (job.h), the media type of its answer,
- * and its open (job.h) or NULL.  An endpoint that is not here answers in
+ * API_ENDPOINTS, its cut and run (job.h), the media type of its answer
+ * (in its other form, API_FORM_NDJSON, application/x-ndjson), and its
+ * open (job.h) or NULL.  An endpoint that is not here answers in
  * one chunk, application/json.
  */
 #define API_JOB_CUTS(X)                                                        \
@@ -97,6 +98,7 @@ struct api_job {
   api_job_cut cut;
   long items;
   size_t held;
+  api_form form; /* of the answer: a row's x was decoded for it */
 };
 
 static const job_row *row_of(size_t ep) {
@@ -163,9 +165,18 @@ static int cut_single(api_job *j, const json_t *root, const api_call *c) {
 
 int api_job_open(size_t index, const char *body, size_t len,
                  const api_limits *lim, api_job **jp, api_response *out) {
+  return api_job_open_form(index, API_FORM_DEFAULT, body, len, lim, jp, out);
+}
+
+int api_job_open_form(size_t index, api_form form, const char *body, size_t len,
+                      const api_limits *lim, api_job **jp, api_response *out) {
   api_err e;
   api_lazies lz = {NULL, 0, 0, 0};
-  api_call c = {lim, NULL, &e, &lz};
+  /* a form the endpoint does not have is its own; the form reaches the
+   * endpoint's decode, which keeps it in x for the chunks */
+  if (api_negotiate(index, "application/x-ndjson") != form)
+    form = API_FORM_DEFAULT;
+  api_call c = {lim, NULL, &e, &lz, form};
   json_t *root = NULL;
   api_job *j = NULL;
   memset(&e, 0, sizeof e);
@@ -183,6 +194,7 @@ int api_job_open(size_t index, const char *body, size_t len,
     goto done;
   }
   j->ep = index;
+  j->form = form;
   j->row = row_of(index);
   int opened =
       j->row && j->row->open && body ? j->row->open(body, len, &c, &j->x) : 0;
@@ -236,6 +248,8 @@ int api_job_visible(const api_job *j, size_t k) {
 }
 
 const char *api_job_content_type(const api_job *j) {
+  if (j->form == API_FORM_NDJSON)
+    return "application/x-ndjson";
   return j->row ? j->row->media : "application/json";
 }
 
@@ -246,7 +260,7 @@ int api_job_run(api_job *j, size_t k, const api_job_inputs *in,
                 api_response *out) {
   api_err e;
   api_lazies lz = {NULL, 0, 0, 0};
-  api_call c = {lim, srv, &e, &lz};
+  api_call c = {lim, srv, &e, &lz, j->form};
   memset(&e, 0, sizeof e);
   memset(out, 0, sizeof *out);
   if (k >= j->cut.n) {
@@ -258,6 +272,7 @@ int api_job_run(api_job *j, size_t k, const api_job_inputs *in,
     if (srv) {
       whole = *srv;
       whole.stream_above = 0;
+      whole.form = j->form;
     }
     api__handle(j->ep, j->text, j->len, lim, srv ? &whole : NULL, out, NULL);
   } else if (j->row->run(j->x, k, in, &c, out) == 0 && out->stream) {
@@ -361,20 +376,22 @@ static json_t *status_of(const api_job_info *in) {
   const double at[] = {in->created, in->started, in->updated, in->finished};
   const char *id = in->id ? in->id : "";
   const char *path = in->path ? in->path : "";
-  char message[96];
+  char message[96], process[32];
+  /* the process is the endpoint, whatever form its answer takes */
+  const char *name = path[0] == '/' ? path + 1 : path;
+  snprintf(process, sizeof process, "%.*s", (int)strcspn(name, "?"), name);
   snprintf(message, sizeof message, "%ld of %ld items done", in->items_done,
            in->items);
   json_t *o = json_object();
-  int bad =
-      !o || api__set(o, "id", json_string(id)) ||
-      api__set(o, "jobID", json_string(id)) ||
-      api__set(o, "type", json_string("process")) ||
-      api__set(o, "processID", json_string(path[0] == '/' ? path + 1 : path)) ||
-      api__set(o, "path", json_string(path)) ||
-      api__set(o, "status", json_string(in->status ? in->status : "")) ||
-      api__set(o, "message",
-               json_string(in->message ? in->message : message)) ||
-      api__set(o, "progress", json_integer(progress(in)));
+  int bad = !o || api__set(o, "id", json_string(id)) ||
+            api__set(o, "jobID", json_string(id)) ||
+            api__set(o, "type", json_string("process")) ||
+            api__set(o, "processID", json_string(process)) ||
+            api__set(o, "path", json_string(path)) ||
+            api__set(o, "status", json_string(in->status ? in->status : "")) ||
+            api__set(o, "message",
+                     json_string(in->message ? in->message : message)) ||
+            api__set(o, "progress", json_integer(progress(in)));
   for (size_t i = 0; !bad && i < sizeof at / sizeof at[0]; i++)
     if (at[i] > 0)
       bad = api__set(o, when[i], instant(at[i]));

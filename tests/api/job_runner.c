@@ -68,9 +68,16 @@ static void concat(const store *s, size_t n, api_response *out) {
 int job_answer(size_t ep, const char *body, size_t len, const api_limits *lim,
                job_order order, unsigned seed, api_response *out,
                job_trace *t) {
+  return job_answer_form(ep, API_FORM_DEFAULT, body, len, lim, order, seed, out,
+                         t);
+}
+
+int job_answer_form(size_t ep, api_form form, const char *body, size_t len,
+                    const api_limits *lim, job_order order, unsigned seed,
+                    api_response *out, job_trace *t) {
   api_job *j;
   memset(t, 0, sizeof *t);
-  if (api_job_open(ep, body, len, lim, &j, out) != 0)
+  if (api_job_open_form(ep, form, body, len, lim, &j, out) != 0)
     return out->status;
   size_t n = api_job_chunks(j);
   store s = {j, calloc(n, sizeof(char *)), calloc(n, sizeof(size_t)), 0, 0};

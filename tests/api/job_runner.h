@@ -34,6 +34,11 @@ typedef struct job_trace {
 int job_answer(size_t ep, const char *body, size_t len, const api_limits *lim,
                job_order order, unsigned seed, api_response *out, job_trace *t);
 
+/* job_answer for an answer in @a form (api_job_open_form). */
+int job_answer_form(size_t ep, api_form form, const char *body, size_t len,
+                    const api_limits *lim, job_order order, unsigned seed,
+                    api_response *out, job_trace *t);
+
 /* A copy of @a s (malloc'd) where the value of every "key": (a number or a
  * string) is 0: the answers compared but for a time they report. */
 char *job_blank(const char *s, size_t len, const char *key);

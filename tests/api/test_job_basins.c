@@ -12,6 +12,11 @@
  * 2 the answer, the only visible chunk.  The last chunks read what is
  * stored: attractors of another build, or labels of other rows, fail the
  * job rather than answer another map.
+ * The NDJSON form (Accept: application/x-ndjson) of each slice: as a job,
+ * the same bytes as the synchronous request, a chunk per line (the head,
+ * each group, the last); its lines give the JSON form's labels exactly
+ * (the rows' labels, then the relabelled runs of the last line) and its
+ * last line has the JSON form's attractors and counts.
  * Usage: test_job_basins
  */
 #include <stdio.h>
@@ -19,6 +24,7 @@
 #include <string.h>
 
 #include <gsl/gsl_errno.h>
+#include <jansson.h>
 
 #include "job_runner.h"
 #include "stickslip_api.h"
@@ -67,6 +73,113 @@ static size_t basins_endpoint(void) {
   return ep;
 }
 
+/* RFC 4648 base64 of @a s into @a out (room for its bytes): their number. */
+static size_t unbase64(const char *s, unsigned char *out) {
+  static const char T[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  size_t n = 0;
+  unsigned v = 0;
+  int bits = 0;
+  for (; *s && *s != '='; s++) {
+    const char *p = strchr(T, *s);
+    v = v << 6 | (unsigned)(p ? p - T : 0);
+    if ((bits += 6) >= 8)
+      out[n++] = (unsigned char)(v >> (bits -= 8));
+  }
+  return n;
+}
+
+/* The labels of a /basins answer in the JSON form @a json, and as the
+ * NDJSON form @a nd rebuilds them, must be the same bytes, and its last
+ * line must have the JSON form's attractors and counts. */
+static void check_lines(const char *json, const char *nd, long cells) {
+  json_t *whole = json_loads(json, 0, NULL);
+  const char *data = json_string_value(
+      json_object_get(json_object_get(whole, "labels"), "data"));
+  unsigned char *want = calloc((size_t)cells + 3, 1);
+  unsigned char *got = calloc((size_t)cells + 3, 1);
+  ASSERT_TRUE(data != NULL && want && got);
+  ASSERT_EQ_INT((long)unbase64(data ? data : "", want), cells);
+  long cols = 0, lines = 0;
+  json_t *last = NULL;
+  for (const char *p = nd; *p; p = strchr(p, '\n') + 1, lines++) {
+    json_t *line = json_loadb(p, (size_t)(strchr(p, '\n') - p), 0, NULL);
+    ASSERT_TRUE(line != NULL);
+    json_t *lab = json_object_get(line, "labels");
+    if (lines == 0) {
+      cols = (long)json_integer_value(json_object_get(lab, "cols"));
+      ASSERT_TRUE(json_array_size(json_object_get(line, "attractors")) > 0);
+    } else if (json_is_string(lab)) {
+      long row = (long)json_integer_value(json_object_get(line, "row"));
+      ASSERT_TRUE(row * cols < cells);
+      unbase64(json_string_value(lab), got + row * cols);
+    } else {
+      json_decref(last);
+      last = json_incref(line);
+    }
+    json_decref(line);
+  }
+  ASSERT_TRUE(last && json_is_true(json_object_get(last, "done")));
+  size_t i;
+  json_t *run;
+  json_array_foreach(json_object_get(last, "relabelled"), i, run) {
+    long at = (long)json_integer_value(json_array_get(run, 0));
+    long n = (long)json_integer_value(json_array_get(run, 1));
+    ASSERT_TRUE(at >= 0 && n > 0 && at + n <= cells);
+    if (at >= 0 && n > 0 && at + n <= cells)
+      memset(got + at, (int)json_integer_value(json_array_get(run, 2)),
+             (size_t)n);
+  }
+  test_checks_++;
+  if (memcmp(got, want, (size_t)cells))
+    TEST_FAIL_("the NDJSON form's labels are not the JSON form's%s", "");
+  static const char *const SAME[] = {"attractors", "unresolved",
+                                     "perpetual_slip", "returns", "input"};
+  for (size_t k = 0; k < sizeof SAME / sizeof SAME[0]; k++)
+    ASSERT_TRUE(json_equal(json_object_get(last, SAME[k]),
+                           json_object_get(whole, SAME[k])));
+  printf("  NDJSON: %ld lines, %zu relabelled runs\n", lines,
+         json_array_size(json_object_get(last, "relabelled")));
+  json_decref(last);
+  json_decref(whole);
+  free(want);
+  free(got);
+}
+
+/* EVIDENCE: api/openapi.json /basins application/x-ndjson: a line per
+ * chunk of the job, the job's answer the synchronous one byte for byte */
+static void check_ndjson(const slice *sl, unsigned threads, const char *json) {
+  size_t ep = basins_endpoint(), len = strlen(sl->body);
+  api_limits lim;
+  api_limits_default(&lim);
+  lim.map_threads = threads;
+  api_server_info srv;
+  memset(&srv, 0, sizeof srv);
+  srv.form = API_FORM_NDJSON;
+  api_response s, r;
+  api_handle(ep, sl->body, len, &lim, &srv, &s);
+  ASSERT_EQ_INT(s.status, 200);
+  ASSERT_TRUE(s.content_type &&
+              !strcmp(s.content_type, "application/x-ndjson"));
+  job_trace t;
+  job_answer_form(ep, API_FORM_NDJSON, sl->body, len, &lim, JOB_SHUFFLE,
+                  7u + threads, &r, &t);
+  test_checks_++;
+  if (r.status != 200 || r.len != s.len || memcmp(r.body, s.body, s.len))
+    TEST_FAIL_("the NDJSON job answers %d\n%.1500s\nthe request "
+               "answers\n%.1500s",
+               r.status, r.body ? r.body : "", s.body);
+  ASSERT_EQ_INT(t.stages, 3);
+  ASSERT_EQ_INT((long)t.chunks, (long)sl->groups + 3);
+  ASSERT_EQ_INT(t.bad_reads, 0);
+  ASSERT_EQ_INT(t.items, sl->cells);
+  ASSERT_TRUE(t.content_type &&
+              !strcmp(t.content_type, "application/x-ndjson"));
+  check_lines(json, s.body, sl->cells);
+  api_response_free(&r);
+  api_response_free(&s);
+}
+
 /* EVIDENCE: stickslip_api.h "Jobs": a /basins' rows of cells are cut in
  * groups, and the job's answer is byte for byte the synchronous one */
 static void check_slice(const slice *sl, unsigned threads) {
@@ -101,6 +214,7 @@ static void check_slice(const slice *sl, unsigned threads) {
   printf("%.60s... on %u thread(s): %zu groups, the same %zu bytes in three "
          "orders\n",
          sl->body, threads, sl->groups, s.len);
+  check_ndjson(sl, threads, s.body);
   api_response_free(&s);
 }
 

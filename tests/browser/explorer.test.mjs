@@ -9,8 +9,9 @@
 // parameters change; draws the overshoot map with its colour key and the
 // current point, loads a cell's orbits by a click; exports every figure
 // (the SVG parses, the PNG is one, the CSV and JSON hold the answer's
-// numbers); runs 100x100 maps as jobs (progress, one cancelled, one
-// finished); continues the family in Fr in physical units; shows errors
+// numbers); picks a map cell with the keyboard; runs 100x100 maps as jobs
+// (progress, one cancelled, one finished) and 256x256 basins whose rows are
+// drawn as they arrive; continues the family in Fr in physical units; shows errors
 // next to their panel and explains a CORS failure; runs axe-core (no
 // serious or critical violation) and checks that nothing overflows at
 // 420 px.  Screenshots go to OUT_DIR.
@@ -189,7 +190,8 @@ try {
     f.yn.value = "12";
   });
   await page.click("#map-form button[type=submit]");
-  await page.waitForFunction(() => document.querySelectorAll("#map rect.cell").length > 0 ||
+  // its cells are drawn as they arrive, its key once the job ends
+  await page.waitForFunction(() => document.querySelectorAll("#map .legend").length > 0 ||
                                    !document.querySelector("#map-panel .error").hidden, { timeout: 60000 });
   const map = await page.evaluate(() => ({
     cells: document.querySelectorAll("#map rect.cell").length,
@@ -256,6 +258,39 @@ try {
   check(rows.some((r) => r[2] === "overshoot"), "a stable cell's click loads its overshoot orbit: ur = " +
         (await page.$eval("input[name=ur]", (e) => e.value)));
   check(await page.$eval("#map", (s) => s.classList.contains("stale")), "the map is marked stale after it");
+
+  // a map cell picked with the keyboard: the roving cell moved with the
+  // arrow keys to the last stable cell, Enter loads its orbits
+  const keys = await page.evaluate(() => {
+    const cells = [...document.querySelectorAll("#map rect.cell")];
+    const start = cells.filter((r) => r.getAttribute("tabindex") === "0");
+    const goal = [...document.querySelectorAll("#map rect.cell.stable")].pop();
+    return { roving: start.length, labelled: cells.every((r) => /: /.test(r.getAttribute("aria-label") || "")),
+             i0: Number(start[0]?.dataset.i), j0: Number(start[0]?.dataset.j),
+             i: Number(goal.dataset.i), j: Number(goal.dataset.j) };
+  });
+  await page.$eval("#map rect.cell[tabindex='0']", (r) => r.focus());
+  for (let k = keys.i0; k < keys.i; k++)
+    await page.keyboard.press("ArrowRight");
+  for (let k = keys.j0; k < keys.j; k++)
+    await page.keyboard.press("ArrowUp");
+  const focused = await page.evaluate(() => {
+    const a = document.activeElement;
+    return { i: Number(a?.dataset?.i), j: Number(a?.dataset?.j), stable: !!a?.classList?.contains("stable"),
+             roving: document.querySelectorAll("#map rect.cell[tabindex='0']").length };
+  });
+  const goalUr = directMap.find((l) => l.index && l.index[0] === keys.i && l.index[1] === keys.j).at.ur;
+  const urBefore = await page.$eval("input[name=ur]", (e) => e.value);
+  await page.keyboard.press("Enter");
+  await page.waitForFunction((b) => document.querySelector("input[name=ur]").value !== b &&
+                             /orbit\(s\)/.test(document.getElementById("status").textContent), { timeout: 30000 }, urBefore).catch(() => {});
+  const urNow = Number(await page.$eval("input[name=ur]", (e) => e.value));
+  rows = await rowsOf();
+  check(keys.roving === 1 && keys.labelled && focused.i === keys.i && focused.j === keys.j && focused.stable &&
+        focused.roving === 1 && Math.abs(urNow - goalUr) < 1e-6 && rows.some((r) => r[2] === "overshoot"),
+        "a map cell picked with the keyboard (one cell in the tab order, arrow keys to cell " + keys.i + "," + keys.j +
+        ", Enter): ur = " + urNow + " (the cell's " + goalUr + "), its overshoot orbit loaded; focus " +
+        JSON.stringify(focused));
 
   check(consoleErrors.length === 0, "no console error: " + consoleErrors.join("; "));
   check(failed.length === 0, "no failed request: " + failed.join("; "));
@@ -342,7 +377,7 @@ try {
   const tj = Date.now();
   while (Date.now() - tj < 60000) {
     const s = await page.evaluate(() => ({ v: document.querySelector("#map-form progress").value,
-                                          n: document.querySelectorAll("#map rect.cell").length }));
+                                          n: document.querySelectorAll("#map .legend").length }));
     seen.add(s.v);
     if (s.n)
       break;
@@ -352,9 +387,29 @@ try {
   check(cells === 10000 && [...seen].some((v) => v > 0 && v < 100),
         "a 100x100 map job finished with progress between (" + [...seen].join(" ") + "): " + cells + " cells " +
         (await shown("#map-panel .error")));
+  // basins drawn as their rows arrive: a 256x256 slice is nine chunks of
+  // 32 rows after the attractors; some rows are painted while the job runs
+  await page.$eval("#basins-form input[name=n]", (e) => { e.value = "256"; });
   await page.click("#basins-form button[type=submit]");
-  await page.waitForFunction(() => document.querySelectorAll("#basins image.basin").length > 0 ||
-                                   !document.querySelector("#basins-panel .error").hidden, { timeout: 60000 });
+  let midway = null;
+  const tb = Date.now();
+  while (Date.now() - tb < 120000) {
+    const s = await page.evaluate(() => ({
+      painted: Number(document.getElementById("basins").dataset.painted || 0),
+      rows: Number(document.getElementById("basins").dataset.rows || 0),
+      running: !document.querySelector("#basins-form progress").hidden,
+      progress: document.querySelector("#basins-form progress").value,
+      error: !document.querySelector("#basins-panel .error").hidden }));
+    if (!midway && s.running && s.painted > 0 && s.painted < s.rows)
+      midway = s;
+    if (!s.running || s.error)
+      break;
+    await new Promise((r) => setTimeout(r, 40));
+  }
+  const painted = await page.$eval("#basins", (s) => Number(s.dataset.painted || 0));
+  check(midway !== null && painted === 256,
+        "basins: rows painted while the job runs (" + JSON.stringify(midway) + "), all 256 at its end (" +
+        painted + ")" + (await shown("#basins-panel .error")));
   const legend = await page.$$eval("#basins .legend text", (ts) => ts.map((t) => t.textContent));
   check(legend.some((l) => /overshoot/.test(l)), "the basins name the overshoot orbit: " + legend.join("; ") +
         (await shown("#basins-panel .error")));
