@@ -176,7 +176,7 @@ int api_job_open_form(size_t index, api_form form, const char *body, size_t len,
    * endpoint's decode, which keeps it in x for the chunks */
   if (api_negotiate(index, "application/x-ndjson") != form)
     form = API_FORM_DEFAULT;
-  api_call c = {lim, NULL, &e, &lz, form};
+  api_call c = {lim, NULL, &e, &lz, NULL, form};
   json_t *root = NULL;
   api_job *j = NULL;
   memset(&e, 0, sizeof e);
@@ -260,7 +260,7 @@ int api_job_run(api_job *j, size_t k, const api_job_inputs *in,
                 api_response *out) {
   api_err e;
   api_lazies lz = {NULL, 0, 0, 0};
-  api_call c = {lim, srv, &e, &lz, j->form};
+  api_call c = {lim, srv, &e, &lz, NULL, j->form};
   memset(&e, 0, sizeof e);
   memset(out, 0, sizeof *out);
   if (k >= j->cut.n) {
