@@ -3,7 +3,7 @@
 # prefix, then build the guide's example program against the installed
 # copy, once with pkg-config and once with find_package(stickslip), and run
 # both; check what else is installed (the static library beside a shared
-# one, the daemon, its man page, the systemd unit).
+# one, the daemon, its man page, the systemd unit, the user's guide).
 # Usage: check_install.sh BUILD_DIR SOURCE_DIR C_COMPILER CMAKE
 set -euo pipefail
 build=$1 src=$2 cc=$3 cmake=$4
@@ -17,6 +17,11 @@ libdir=$(cd "$libdir" && pwd)
 test -f "$prefix/include/stickslip.h"
 test -f "$libdir/libstickslip.a" || { echo "no static library"; exit 1; }
 test -f "$prefix/share/doc/stickslip/LICENSE"
+# the user's guide, when the build made it (mkdocs installed)
+if [ -f "$build/docs/site/index.html" ]; then
+  test -f "$prefix/share/doc/stickslip/html/index.html" ||
+    { echo "the user's guide is not installed"; exit 1; }
+fi
 
 # pkg-config, as stickslip.pc's comment says: a shared library outside the
 # linker's search path is found with the run path it names (without one

@@ -8,6 +8,8 @@
   check_release.py cff
       CITATION.cff against tests/release/cff.schema.json (python3-yaml,
       python3-jsonschema; exit 77 without them)
+  check_release.py readme
+      README.md is what a newcomer reads on a screen or two: under 200 lines
   check_release.py names STICKSLIPD
       every flag the README, the changelog and the guide name is a flag of
       `STICKSLIPD --help` (or one its option parser in server/main.c takes)
@@ -163,12 +165,20 @@ def names(stickslipd):
     return 1 if bad else 0
 
 
+def readme():
+    n = read("README.md").count("\n")
+    print("readme: README.md has %d lines (at most 199)" % n)
+    return 0 if n < 200 else 1
+
+
 def main():
     a = sys.argv[1:]
     if len(a) == 2 and a[0] == "version":
         sys.exit(version(a[1]))
     if a == ["cff"]:
         sys.exit(cff())
+    if a == ["readme"]:
+        sys.exit(readme())
     if len(a) == 2 and a[0] == "names":
         sys.exit(names(a[1]))
     sys.exit(__doc__)
