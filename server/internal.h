@@ -137,7 +137,7 @@ typedef struct srv__req {
   int page;        /* GET /problems/<type>: the page of a problem type */
   int vary_accept; /* the answer depends on Accept (Vary: Accept) */
   int gzip;        /* the client accepts gzip */
-  int form; /* the answer's form its Accept asks for (api_negotiate) */
+  int form;        /* the answer's form its Accept asks for (api_negotiate) */
   char method[8];
   char path[96];
   char key[SRV_CLIENT_KEY]; /* the client, for the pool's queues */

@@ -194,8 +194,8 @@ int api__handle(size_t index, const char *body, size_t len,
   api_err e;
   api_lazies lz = {NULL, 0, 0, 0};
   int small = 0;
-  api_call c = {lim, srv, &e, &lz, &small,
-                srv ? (api_form)srv->form : API_FORM_DEFAULT};
+  api_call c = {lim, srv,    &e,
+                &lz, &small, srv ? (api_form)srv->form : API_FORM_DEFAULT};
   json_t *root = NULL;
   void *x = NULL;
   memset(&e, 0, sizeof e);
