@@ -1497,15 +1497,23 @@ typedef struct ss_basins {
  * comes within the attractor's radius of.  The radius is certified by a
  * contraction check: starting at 1e-2 of the scale (ur - us)/chi (and V),
  * or at the orbit's smallest feasibility margin when smaller, it is
- * quartered until, for some j <= 8, P^(k j) (k the attractor's turns) maps
+ * quartered until, for some j, P^(k j) (k the attractor's turns) maps
  * 64 points of the circle of that radius around each of its returns, 32 of
  * the circle of half of it and the return itself to within 0.9 of it; a motion
- * inside is then drawn in, and the label is final.  Cells that land on no known
- * attractor within max_returns are simulated on (ss_attractor_from()); a
- * periodic attractor they settle on is added (from_simulation) when it solves
- * as a feasible stable orbit, and those cells are tried again; the rest stay
- * unresolved.  The composition of ss_basins_alloc(), ss_basins_attractors(),
- * ss_basins_rows() over every row and ss_basins_finish(), under one budget.
+ * inside is then drawn in, and the label is final.  j may reach twice the
+ * periods its linearisation takes to shrink a circle to 0.45 of itself (at
+ * least 8); an orbit that needs more than 256 (spectral radius above about
+ * 0.994) is not certified, and is no attractor.  So every stable orbit of
+ * the search's that the check passes, in particular every one of spectral
+ * radius below 0.99 whose map is smooth within the radius, is an attractor.
+ * Cells that land on no known attractor within max_returns are resolved from
+ * their last return: Newton on the return map P^k, k up to max_period (the
+ * search's own, source SS_SOURCE_MAP_NEWTON), then simulated on
+ * (ss_attractor_from()); a stable orbit either reaches is added
+ * (from_simulation) when it solves as a feasible stable orbit, and those
+ * cells are tried again; the rest stay unresolved.  The composition of
+ * ss_basins_alloc(), ss_basins_attractors(), ss_basins_rows() over every row
+ * and ss_basins_finish(), under one budget.
  * @return SS_OK; SS_EINVAL (bad options); SS_ELIMIT_TIME, SS_ECANCELED
  *         (labels not reached are SS_BASIN_UNRESOLVED); SS_ENOMEM.
  *         Release @a b with ss_basins_free() whatever happens.

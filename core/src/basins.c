@@ -11,7 +11,7 @@
  * the neighbourhood where the orbit's sequence, and so its contraction,
  * holds.  The radius starts at 1e-2 of the problem's scale, or at the
  * orbit's smallest feasibility margin when that is smaller, and is quartered
- * (up to 8 times) until, for some j <= 8, P^(k j) maps 64 points of the
+ * (up to 8 times) until, for some j, P^(k j) maps 64 points of the
  * circle of that radius around each of the orbit's returns, 32 of the circle
  * of half of it and the return itself to within 0.9 of the radius: a check on
  * samples, not a proof, but one made on the map itself rather than on its
@@ -20,10 +20,16 @@
  * norm 1.40; its period-3 orbit 0.31 and 6.4), so a circle is first stretched
  * before it shrinks.
  *
+ * j runs to twice what the linearisation needs (check_iterations()), so a
+ * slowly contracting orbit is judged by as many periods as it needs.
+ *
  * The cells run on opts->threads threads, a row at a time.  Cells that
- * land nowhere are then simulated on to find what they settle on; each
- * periodic attractor found that way is solved as an orbit and, when it is a
- * feasible stable one, added, and the unresolved cells are run again.
+ * land nowhere are then resolved from their last return: Newton on P^k,
+ * the search's (a motion that has not settled after max_returns returns is
+ * often near an attractor that contracts slowly, and Newton converges there
+ * in a few steps), then simulation on to what it settles on; each periodic
+ * orbit found that way is solved and, when it is a feasible stable one,
+ * added, and the unresolved cells are run again.
  *
  * The time budget and the cancel hook are polled inside the cells, every
  * SS__POLL_EVERY events of their motions (and of the attractor finder's and
@@ -38,6 +44,7 @@
 
 #include "attractor.h"
 #include "internal.h"
+#include "search.h"
 #include "simulate.h"
 #include "stability.h"
 
@@ -46,7 +53,9 @@
 #define BASIN_CIRCLE 64 /* points of the circle checked */
 #define BASIN_SHRINK 0.9
 #define BASIN_HALVINGS 8
-#define BASIN_MAX_ITERATIONS 8 /* periods the contraction may take */
+/* the periods the contraction check may take: at least, and at most */
+#define BASIN_MAX_ITERATIONS 8
+#define BASIN_ITERATIONS_CAP 256
 #define BASIN_MAX_THREADS 64
 #define BASIN_SETTLE_TURNS 5000
 
@@ -196,14 +205,42 @@ static void run_rows(runner *r, int from, int to) {
     pthread_join(th[t], NULL);
 }
 
+/* The periods the contraction check may take for the orbit @a o: twice
+ * those its linearisation takes, the least j with |J^j| (Frobenius, above
+ * the 2-norm) <= BASIN_SHRINK / 2, and at least BASIN_MAX_ITERATIONS; 0
+ * when that is more than BASIN_ITERATIONS_CAP (a spectral radius above
+ * about 0.994: an attractor too slow to certify at a bounded cost).  A
+ * multiplier near the unit circle contracts slowly (issue 32's period
+ * 25.59 orbit: spectral radius 0.917, a circle shrunk to 0.916 of itself
+ * after 8 periods, to 0.892 after 9), and a fixed count of 8 refused such
+ * an attractor however small its radius. */
+static int check_iterations(const ss_orbit *o) {
+  const double(*J)[2] = o->stab.jac;
+  double P[2][2] = {{J[0][0], J[0][1]}, {J[1][0], J[1][1]}};
+  for (int j = 1; 2 * j <= BASIN_ITERATIONS_CAP; j++) {
+    if (hypot(hypot(P[0][0], P[0][1]), hypot(P[1][0], P[1][1])) <=
+        0.5 * BASIN_SHRINK)
+      return 2 * j > BASIN_MAX_ITERATIONS ? 2 * j : BASIN_MAX_ITERATIONS;
+    double Q[2][2];
+    for (int r = 0; r < 2; r++)
+      for (int c = 0; c < 2; c++)
+        Q[r][c] = P[r][0] * J[0][c] + P[r][1] * J[1][c];
+    memcpy(P, Q, sizeof P);
+  }
+  return 0;
+}
+
 /* The returns of the orbit @a o (its start and P of it, k - 1 times), and
  * the certified radius; 0, or -1 when the orbit cannot be an attractor
  * here (more turns than room, or the check fails at every radius) or when
- * @a poll says stop. */
+ * @a poll says stop.  The samples of each radius are carried one period
+ * (P^k) at a time, and the check passes at the first period j at which all
+ * are inside. */
 static int certify(const ss_model *m, const ss_orbit *o, ss__poll *poll,
                    ss_basin_attractor *a) {
-  int k = o->n_turns;
-  if (k < 1 || k > SS_BASIN_MAX_TURNS)
+  enum { PER_RETURN = BASIN_CIRCLE + BASIN_CIRCLE / 2 + 1 };
+  int k = o->n_turns, max_it = check_iterations(o);
+  if (k < 1 || k > SS_BASIN_MAX_TURNS || max_it == 0)
     return -1;
   a->orbit = *o;
   a->n_points = k;
@@ -221,41 +258,49 @@ static int certify(const ss_model *m, const ss_orbit *o, ss__poll *poll,
   double rad = 1e-2 * scale;
   if (o->min_margin.value > 0 && o->min_margin.value < rad)
     rad = o->min_margin.value;
-  for (int h = 0; h < BASIN_HALVINGS; h++, rad *= 0.25)
-    for (int it = 1; it <= BASIN_MAX_ITERATIONS && !poll->stopped; it++) {
-      int ok = 1;
-      /* the circle, a circle of half the radius, and the centre */
-      for (int i = 0; i < k && ok; i++)
-        for (int q = 0; q <= BASIN_CIRCLE + BASIN_CIRCLE / 2 && ok; q++) {
-          int outer = q < BASIN_CIRCLE;
-          double ang = outer ? 6.283185307179586 * q / BASIN_CIRCLE
-                             : 12.566370614359172 * (q - BASIN_CIRCLE + 0.5) /
-                                   BASIN_CIRCLE;
-          double u = q == BASIN_CIRCLE + BASIN_CIRCLE / 2 ? 0
-                     : outer                              ? rad
-                                                          : 0.5 * rad;
-          double s[2] = {a->points[i][0] + u * cos(ang),
-                         a->points[i][1] + u * sin(ang)},
-                 e[2];
-          ok = ss__poincare(m, s, k * it, ev * (size_t)it, e, NULL, NULL, NULL,
-                            poll) == SS_OK &&
-               hypot(e[0] - a->points[i][0], e[1] - a->points[i][1]) <
-                   BASIN_SHRINK * rad;
+  double e[SS_BASIN_MAX_TURNS][PER_RETURN][2];
+  for (int h = 0; h < BASIN_HALVINGS && !poll->stopped; h++, rad *= 0.25) {
+    /* the circle, a circle of half the radius, and the centre */
+    for (int i = 0; i < k; i++)
+      for (int q = 0; q < PER_RETURN; q++) {
+        int outer = q < BASIN_CIRCLE;
+        double ang = outer ? 6.283185307179586 * q / BASIN_CIRCLE
+                           : 12.566370614359172 * (q - BASIN_CIRCLE + 0.5) /
+                                 BASIN_CIRCLE;
+        double u = q == PER_RETURN - 1 ? 0 : outer ? rad : 0.5 * rad;
+        e[i][q][0] = a->points[i][0] + u * cos(ang);
+        e[i][q][1] = a->points[i][1] + u * sin(ang);
+      }
+    int failed = 0;
+    for (int it = 1; it <= max_it && !failed && !poll->stopped; it++) {
+      int inside = 1;
+      for (int i = 0; i < k && !failed; i++)
+        for (int q = 0; q < PER_RETURN && !failed; q++) {
+          failed = ss__poincare(m, e[i][q], k, ev, e[i][q], NULL, NULL, NULL,
+                                poll) != SS_OK;
+          inside = inside &&
+                   hypot(e[i][q][0] - a->points[i][0],
+                         e[i][q][1] - a->points[i][1]) < BASIN_SHRINK * rad;
         }
-      if (ok) {
+      if (!failed && inside) {
         a->radius = rad;
         a->iterations = it;
         return 0;
       }
     }
+  }
   return -1;
 }
 
-/* Is @a o (a stable orbit) one of the attractors already? */
+/* Is @a o (a stable orbit) one of the attractors already?  Its start
+ * within the certified radius of an attractor's return is that attractor,
+ * or that attractor travelled several times (a motion settling slowly on
+ * it can repeat after k turns to the finder's tolerance before it does
+ * after one): no other periodic orbit is inside a radius every motion from
+ * which is drawn to the attractor. */
 static int known(const ss_basins *b, const ss_orbit *o) {
   double s[2] = {o->z0[0], o->z0[2]};
-  int a = landed(b, s);
-  return a >= 0 && b->attractors[a].n_points == o->n_turns;
+  return landed(b, s) >= 0;
 }
 
 static int add_attractor(const ss_model *m, ss_basins *b, const ss_orbit *o,
@@ -272,12 +317,51 @@ static int add_attractor(const ss_model *m, ss_basins *b, const ss_orbit *o,
   return 1;
 }
 
-/* The cells still unresolved, simulated on from their last return: the
- * periodic attractors they settle on, as orbits.  1 if one was added. */
+/* The stable orbit of k turns, k up to max_period, that Newton on the
+ * return map P^k (the orbit search's, ss__map_newton()) reaches from the
+ * return @a s of a motion that did not settle, added as an attractor: 1 if
+ * one was. */
+static int from_newton(runner *r, const double s[2], ss__poll *poll) {
+  for (int k = 1; k <= r->o.max_period && !poll->stopped; k++) {
+    double f[2] = {s[0], s[1]}, dur[SS_MAX_PHASES];
+    ss_mode modes[SS_MAX_PHASES];
+    int n;
+    ss_orbit orb;
+    if (ss__map_newton(r->m, f, k, modes, dur, &n) != 0 ||
+        !ss__minimal_period(r->m, f, k) ||
+        ss_orbit_solve(r->m, n, modes, dur, NULL, &orb, NULL) != SS_OK)
+      continue;
+    orb.source = SS_SOURCE_MAP_NEWTON;
+    if (add_attractor(r->m, r->b, &orb, 1, poll))
+      return 1;
+  }
+  return 0;
+}
+
+/* The periodic attractor a motion that landed nowhere, its last return
+ * @a s, settles on, simulated on: 1 if it was added. */
+static int from_settling(runner *r, const double s[2], ss__poll *poll) {
+  ss_attractor at;
+  if (ss__attractor_from(r->m, s, BASIN_SETTLE_TURNS, r->o.max_period, poll,
+                         &at) != SS_OK ||
+      !at.found || at.n_phases > SS_MAX_PHASES)
+    return 0;
+  ss_orbit orb;
+  if (ss_orbit_solve(r->m, at.n_phases, at.modes, at.durations, NULL, &orb,
+                     NULL) != SS_OK)
+    return 0;
+  orb.source = SS_SOURCE_SIMULATION;
+  return add_attractor(r->m, r->b, &orb, 1, poll);
+}
+
+/* The cells still unresolved: from each one's last return, Newton on the
+ * return map, then its motion simulated on; the first stable orbit either
+ * gives is added.  1 if one was (this cell and those like it are then run
+ * again). */
 static int from_simulation(runner *r) {
   const ss_basin_opts *o = &r->o;
   ss_basins *b = r->b;
-  int added = 0, tried = 0;
+  int tried = 0;
   ss__poll poll = {must_stop, r, 0, 0};
   for (int i = 0; i < o->n[0] && !over_budget(r); i++)
     for (int j = 0; j < o->n[1] && tried < 64 && !poll.stopped; j++) {
@@ -292,23 +376,10 @@ static int from_simulation(runner *r) {
       if (follow(r, x, &poll, &n, s) != SS_BASIN_UNRESOLVED || n == 0)
         continue;
       tried++;
-      ss_attractor at;
-      if (ss__attractor_from(r->m, s, BASIN_SETTLE_TURNS, o->max_period, &poll,
-                             &at) != SS_OK ||
-          !at.found || at.n_phases > SS_MAX_PHASES)
-        continue;
-      ss_orbit orb;
-      if (ss_orbit_solve(r->m, at.n_phases, at.modes, at.durations, NULL, &orb,
-                         NULL) != SS_OK)
-        continue;
-      orb.source = SS_SOURCE_SIMULATION;
-      if (add_attractor(r->m, b, &orb, 1, &poll)) {
-        added = 1;
-        /* this cell and those like it are run again */
-        return added;
-      }
+      if (from_newton(r, s, &poll) || from_settling(r, s, &poll))
+        return 1;
     }
-  return added;
+  return 0;
 }
 
 /* ---- the stages ----------------------------------------------------------

@@ -410,23 +410,24 @@ static void certify_family(collect *c, int f, double dmax, double seconds,
 
 /* Newton on P^k(s) = s with the analytic Jacobian of the travelled
  * sequence.  On success, fills the sequence and returns 0. */
-static int map_newton(collect *c, double s[2], int k, ss_mode *modes,
-                      double *dur, int *np) {
-  const ss_params *p = &c->m->p;
+int ss__map_newton(const ss_model *m, double s[2], int k, ss_mode *modes,
+                   double *dur, int *np) {
+  const ss_params *p = &m->p;
+  double scale = fmax(p->V, (p->ur - p->us) / p->chi);
   for (int it = 0; it < MAP_NEWTON_ITERS; it++) {
     double out[2], z0[4];
     ss_stab st;
-    if (ss_poincare(c->m, s, k, (size_t)(MAP_EVENTS * k), out, modes, dur, np))
+    if (ss_poincare(m, s, k, (size_t)(MAP_EVENTS * k), out, modes, dur, np))
       return -1;
     double g0 = out[0] - s[0], g1 = out[1] - s[1];
-    if (fabs(g0) + fabs(g1) < 1e-12 * c->scale)
+    if (fabs(g0) + fabs(g1) < 1e-12 * scale)
       return 0;
     z0[0] = s[0];
     z0[1] = s[0] + (p->ur - p->us) / p->chi;
     z0[2] = s[1];
     z0[3] = p->V;
     ss_stab_opts so = {k, 0};
-    if (ss_stability(c->m, *np, modes, dur, z0, &so, &st))
+    if (ss_stability(m, *np, modes, dur, z0, &so, &st))
       return -1;
     double a = st.jac[0][0] - 1, b = st.jac[0][1], cc = st.jac[1][0],
            d = st.jac[1][1] - 1, det = a * d - b * cc;
@@ -434,7 +435,7 @@ static int map_newton(collect *c, double s[2], int k, ss_mode *modes,
       return -1;
     double d0 = (-g0 * d + g1 * b) / det, d1 = (-a * g1 + cc * g0) / det;
     /* damp steps that leave the neighbourhood */
-    double lim = 0.5 * c->scale, len = fabs(d0) + fabs(d1);
+    double lim = 0.5 * scale, len = fabs(d0) + fabs(d1);
     if (len > lim) {
       d0 *= lim / len;
       d1 *= lim / len;
@@ -522,7 +523,7 @@ static void from_simulation(collect *c, const double seed[2], int max_k) {
     s[0] = pts[np][0];
     s[1] = pts[np][1];
     c->rep->newton_starts++;
-    if (map_newton(c, s, k_found, modes, dur, &n) == 0)
+    if (ss__map_newton(c->m, s, k_found, modes, dur, &n) == 0)
       try_solve(c, n, modes, dur, SS_SOURCE_SIMULATION);
     return;
   }
@@ -547,7 +548,7 @@ static void from_simulation(collect *c, const double seed[2], int max_k) {
     s[0] = pts[best_j][0];
     s[1] = pts[best_j][1];
     c->rep->newton_starts++;
-    if (map_newton(c, s, k, modes, dur, &n) == 0)
+    if (ss__map_newton(c->m, s, k, modes, dur, &n) == 0)
       try_solve(c, n, modes, dur, SS_SOURCE_SIMULATION);
   }
 }
@@ -711,13 +712,14 @@ static int from_scan(collect *c, unsigned kinds, int effort, ss_diag *d) {
 }
 
 /* Whether the fixed point s of P^k is one of no P^j, j | k, j < k. */
-static int minimal_period(const collect *c, const double s[2], int k) {
-  double o1[2];
+int ss__minimal_period(const ss_model *m, const double s[2], int k) {
+  const ss_params *p = &m->p;
+  double scale = fmax(p->V, (p->ur - p->us) / p->chi), o1[2];
   for (int j = 1; j < k; j++)
     if (k % j == 0 &&
-        ss_poincare(c->m, s, j, MAP_EVENTS * (size_t)j, o1, NULL, NULL, NULL) ==
+        ss_poincare(m, s, j, MAP_EVENTS * (size_t)j, o1, NULL, NULL, NULL) ==
             0 &&
-        fabs(o1[0] - s[0]) + fabs(o1[1] - s[1]) < 1e-8 * c->scale)
+        fabs(o1[0] - s[0]) + fabs(o1[1] - s[1]) < 1e-8 * scale)
       return 0;
   return 1;
 }
@@ -731,7 +733,8 @@ static void from_map_newton(collect *c, double seeds[][2], int ns, int kmax) {
       ss_mode modes[SS_MAX_PHASES];
       int n;
       c->rep->newton_starts++;
-      if (map_newton(c, s, k, modes, dur, &n) == 0 && minimal_period(c, s, k))
+      if (ss__map_newton(c->m, s, k, modes, dur, &n) == 0 &&
+          ss__minimal_period(c->m, s, k))
         try_solve(c, n, modes, dur, SS_SOURCE_MAP_NEWTON);
     }
 }

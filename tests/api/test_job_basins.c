@@ -6,8 +6,10 @@
  * The slices: the paper's set over 7 rows of 2730 cells (groups of 3 rows:
  * 3, 3 and 1), the set of issue 32 over 3 rows of 4097 cells (groups of a
  * row; max_period 8, cells that land on no attractor the search names) and
- * over 32x32 cells, and a set where an attractor is found from simulation
- * (16x16 cells, one group); on one thread and on two.  The cut: stage 0
+ * over 32x32 cells, a set with a slow attractor and cells left unresolved
+ * (16x16 cells, one group), and a set where stage 2 finds an attractor by
+ * Newton on the return map (8x8 cells, one group); on one thread and on
+ * two.  The cut: stage 0
  * the attractors, stage 1 the groups of rows (their cells the items), stage
  * 2 the answer, the only visible chunk.  The last chunks read what is
  * stored: attractors of another build, or labels of other rows, fail the
@@ -35,6 +37,8 @@
   "{\"chi\":0.6673,\"eta\":2.5843,\"us\":0.1883,\"ur\":2.4124,\"V\":1}"
 #define SIMULATION                                                             \
   "{\"chi\":0.4977,\"eta\":0.3593,\"us\":0.1201,\"ur\":0.8447,\"V\":1}"
+#define NEWTON                                                                 \
+  "{\"chi\":0.54,\"eta\":4.8436,\"us\":0.0574,\"ur\":0.3402,\"V\":1}"
 
 typedef struct slice {
   const char *body;
@@ -64,7 +68,11 @@ static const slice SLICES[] = {
     {"{\"params\":" SIMULATION ",\"axes\":[{\"variable\":\"x1\","
      "\"from\":-1.456,\"to\":1.456,\"n\":16},{\"variable\":\"x2\","
      "\"from\":-1.456,\"to\":2.912,\"n\":16}],\"state\":{\"v1\":0,\"v2\":1}}",
-     16 * 16, 1, 1},
+     16 * 16, 1, 0},
+    {"{\"params\":" NEWTON ",\"axes\":[{\"variable\":\"x1\","
+     "\"from\":-1.875,\"to\":2.125,\"n\":8},{\"variable\":\"x2\","
+     "\"from\":-1.77,\"to\":2.23,\"n\":8}],\"state\":{\"v1\":0,\"v2\":1}}",
+     8 * 8, 1, 1},
 };
 
 static size_t basins_endpoint(void) {

@@ -10,11 +10,17 @@
  * one thread and on two, with groups of 1, 3 and 7 rows, on:
  *  - the paper's set over a 12x12 slice (two attractors of the search);
  *  - chi 0.6673, eta 2.5843, us 0.1883, ur 2.4124 over 32x32 cells of the
- *    slice of issue 32 (max_period 8): cells that land on neither attractor
- *    the search names, which stage 2 simulates on and leaves unresolved;
- *  - chi 0.4977, eta 0.3593, us 0.1201, ur 0.8447 over 16x16 cells: a
- *    period-4 attractor the search does not name, found from simulation in
- *    stage 2, whose cells are labelled there (others stay unresolved).
+ *    slice of issue 32 (max_period 8): three attractors of the search, every
+ *    cell resolved in stage 1;
+ *  - chi 0.4977, eta 0.3593, us 0.1201, ur 0.8447 over 16x16 cells: two
+ *    attractors of the search (the slow one, spectral radius 0.978, the
+ *    period-4 attractor stage 2 found before the contraction check could
+ *    take more than 8 periods: itself travelled four times), and cells
+ *    that stage 2 leaves unresolved (they near a period-2 orbit of spectral
+ *    radius 0.99987, too slow to certify);
+ *  - chi 0.54, eta 4.8436, us 0.0574, ur 0.3402 over 8x8 cells: a 2-turn
+ *    attractor the search does not name, found in stage 2 by Newton on the
+ *    return map from the last return of a cell that did not settle.
  * The stages also refuse a map of another slice and rows outside it.
  */
 #include <stdio.h>
@@ -31,10 +37,11 @@ typedef struct slice_case {
   int n, max_period;
   int want_simulation; /* an attractor from simulation is expected */
   int want_unresolved; /* cells left unresolved are expected */
+  int want_newton;     /* one from Newton on the return map is expected */
 } slice_case;
 
 static const slice_case CASES[] = {
-    {"paper", {0.2, 4, 0.0724, 0.6178, 1}, {-2, 0}, {4, 8}, 12, 4, 0, 0},
+    {"paper", {0.2, 4, 0.0724, 0.6178, 1}, {-2, 0}, {4, 8}, 12, 4, 0, 0, 0},
     {"issue 32, 32x32",
      {0.6673, 2.5843, 0.1883, 2.4124, 1},
      {-3.4340246468289752, -5.151842719659786},
@@ -42,13 +49,24 @@ static const slice_case CASES[] = {
      32,
      8,
      0,
-     1},
-    {"from simulation",
+     0,
+     0},
+    {"slow attractor",
      {0.4977, 0.3593, 0.1201, 0.8447, 1},
      {-1.456, -1.456},
      {1.456, 2.912},
      16,
      4,
+     0,
+     1,
+     0},
+    {"Newton in stage 2",
+     {0.54, 4.8436, 0.0574, 0.3402, 1},
+     {-1.875, -1.77},
+     {2.125, 2.23},
+     8,
+     4,
+     1,
      1,
      1},
 };
@@ -178,9 +196,12 @@ int main(void) {
       ss_basins whole;
       ss_diag d;
       ASSERT_EQ_INT(ss_basins_run(&m, &o, &whole, &d), SS_OK);
-      int simulation = 0;
-      for (int a = 0; a < whole.n_attractors; a++)
+      int simulation = 0, newton = 0;
+      for (int a = 0; a < whole.n_attractors; a++) {
         simulation += whole.attractors[a].from_simulation;
+        newton += whole.attractors[a].from_simulation &&
+                  whole.attractors[a].orbit.source == SS_SOURCE_MAP_NEWTON;
+      }
       printf("%s, %d thread(s): %d attractors (%d from simulation), %ld "
              "unresolved, %ld returns\n",
              c->name, threads, whole.n_attractors, simulation, whole.unresolved,
@@ -188,6 +209,7 @@ int main(void) {
       ASSERT_TRUE(whole.n_attractors >= 1);
       ASSERT_EQ_INT(simulation > 0, c->want_simulation);
       ASSERT_EQ_INT(whole.unresolved > 0, c->want_unresolved);
+      ASSERT_EQ_INT(newton > 0, c->want_newton);
       for (size_t g = 0; g < sizeof GROUPS / sizeof GROUPS[0]; g++) {
         ss_basins parts;
         staged(&m, &o, GROUPS[g], 7u * (unsigned)g + (unsigned)k, &parts);
