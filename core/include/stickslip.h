@@ -1327,8 +1327,8 @@ typedef struct ss_map_opts {
   int effort;     /**< of the full searches, as in ss_orbit_opts (0: 2) */
   /** The full search runs on a lattice of cells spread evenly along each
    *  axis from the first to the last, at most search_every apart, at every
-   *  cell into which a neighbour's orbit does not
-   *  continue and which has no orbit of that sequence, and, when
+   *  cell into which a neighbour's orbit does not continue (or continues
+   *  far from itself) and which holds no orbit near it, and, when
    *  search_every is 1, everywhere (see no_edge_search).  0: 8. */
   int search_every;
   int max_orbits; /**< per cell (0: 16) */
@@ -1383,9 +1383,9 @@ SS_API int ss_map_params(const ss_params *p, const ss_map_opts *opts,
  * cells (8 of them in two dimensions) as a guess, again from every cell
  * it reaches, so that no cell lacks an orbit of a family that a neighbour
  * has and that continues into it; where a neighbour's orbit does not
- * continue and the cell has no orbit of its sequence (a family ends, or
- * turns), the full search runs there too.  Every orbit is feasible by
- * ss_orbit_check(), with its stability.
+ * continue, or continues far from itself, and the cell holds no orbit near
+ * it (a family ends, or turns), the full search runs there too.  Every
+ * orbit is feasible by ss_orbit_check(), with its stability.
  * @param n_axes  1 or 2; two axes name different parameters
  * @param[out] map  release with ss_map_free() whatever happens
  * @return SS_OK; SS_EINVAL (bad axes or options); SS_EDOMAIN (a cell's
