@@ -42,6 +42,14 @@ static double now(void) {
   return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
+/* The CPU time of the calling thread: what the computation spends between
+ * two polls, whatever else the machine runs. */
+static double cpu_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
 static void slice(ss_basin_opts *o, int n, double c) {
   memset(o, 0, sizeof *o);
   o->vary[0] = 0;
@@ -107,7 +115,7 @@ static int cancel_now(void *cls) {
 }
 
 /* A cancel hook that says stop from stop_after seconds after t0 on, and
- * records the longest time between two of its calls. */
+ * records the longest CPU time between two of its calls. */
 typedef struct watch {
   double t0, stop_after, last, gap;
   long calls;
@@ -115,11 +123,11 @@ typedef struct watch {
 
 static int watch_hook(void *cls) {
   watch *w = cls;
-  double t = now();
-  if (w->calls++ && t - w->last > w->gap)
-    w->gap = t - w->last;
-  w->last = t;
-  return t - w->t0 > w->stop_after;
+  double c = cpu_now();
+  if (w->calls++ && c - w->last > w->gap)
+    w->gap = c - w->last;
+  w->last = c;
+  return now() - w->t0 > w->stop_after;
 }
 
 /* EVIDENCE: DESIGN section 5, a request's compute time is bounded and a
@@ -144,7 +152,9 @@ static void stops_inside_a_cell(const ss_model *m) {
   double t = now() - w.t0;
   printf("cancelled after %.3f s: %ld polls, at most %.4f s apart\n", t,
          w.calls, w.gap);
-  ASSERT_TRUE(t < w.stop_after + 0.2);
+  /* unpolled, the cell runs 3 s of CPU or more: a second's room for a
+   * loaded machine still tells them apart */
+  ASSERT_TRUE(t < w.stop_after + 1.0);
   ASSERT_TRUE(w.gap < 0.1);
   ASSERT_EQ_INT(b.unresolved, 1);
   ss_basins_free(&b);
@@ -154,7 +164,7 @@ static void stops_inside_a_cell(const ss_model *m) {
   ASSERT_EQ_INT(ss_basins_run(m, &o, &b, &d), SS_ELIMIT_TIME);
   t = now() - t0;
   printf("over the budget of %g s after %.3f s\n", o.max_seconds, t);
-  ASSERT_TRUE(t < 1.5 * o.max_seconds);
+  ASSERT_TRUE(t < o.max_seconds + 1.0);
   ss_basins_free(&b);
 }
 
