@@ -99,7 +99,8 @@ def cff():
 # Flags of tools other than stickslipd that the pages name, by tool.
 OTHER_TOOLS = {
     "mkdocs build": ["--strict"],
-    "pkg-config": ["--cflags", "--libs", "--static"],
+    "pkg-config": ["--cflags", "--libs", "--static", "--variable"],
+    "systemctl": ["--now"],
     "cmake": ["--build", "--install", "--prefix", "--target"],
     "docker": ["--build-arg", "--rm", "--scale"],
     "scripts/setup.sh": ["--test"],
