@@ -205,8 +205,11 @@ def check_connection_reserve(binary):
                                    text=True).stdout
 
         def default(flag):
-            m = re.search(r"%s N .*\((\d+)\)" % flag, help_text)
-            return int(m.group(1)) if m else 0
+            # the flag's lines (its text may wrap), its default last
+            m = re.search(r"^\s*%s N (.*?)(?=^  --|\Z)" % flag, help_text,
+                          re.M | re.S)
+            d = re.findall(r"\((\d+)\)", m.group(1)) if m else []
+            return int(d[-1]) if d else 0
         total = default("--max-connections")
         per_ip = default("--per-ip-connections")
         reserve = default("--reserved-connections")
