@@ -20,7 +20,6 @@ file).
   stickslip_job_items_total{endpoint} is the map's cells, then the
   basins' cells.
 """
-import http.client
 import json
 import os
 import re
@@ -28,7 +27,8 @@ import subprocess
 import sys
 import time
 
-PAPER = {"chi": 0.2, "eta": 4, "us": 0.0724, "ur": 0.6178, "V": 1}
+from jobcheck import PAPER, call, check, outcome, pg_uri, start
+
 # 12x12 cells: lattice groups and the chunk that spreads them
 MAP = {"params": PAPER, "kind": "all",
        "axes": [{"parameter": "ur", "from": 0.45, "to": 0.9, "n": 12},
@@ -39,24 +39,6 @@ BASINS = {"params": PAPER,
                    {"variable": "x2", "from": 0, "to": 8, "n": 512}],
           "state": {"v1": 0, "v2": 1}}
 NDJSON = {"Accept": "application/x-ndjson"}
-FAILURES = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        FAILURES.append(what)
-
-
-def call(port, method, path, body=None, headers=None):
-    c = http.client.HTTPConnection("127.0.0.1", port, timeout=600)
-    h = {"Content-Type": "application/json"}
-    h.update(headers or {})
-    c.request(method, path, None if body is None else json.dumps(body), h)
-    r = c.getresponse()
-    data = r.read().decode()
-    c.close()
-    return r.status, dict(r.getheaders()), data
 
 
 def submit(port, path, body, headers=None):
@@ -164,25 +146,16 @@ def main():
     daemon, store = sys.argv[1], sys.argv[2]
     name = None
     if store.startswith("@"):
-        try:
-            with open(store[1:]) as f:
-                uri = f.read().strip()
-        except OSError:
-            print("no PostgreSQL (%s unreadable): skipped" % store)
+        uri = pg_uri(store)
+        if uri is None:
             return 77
         name = "ss_job_answers_%d" % os.getpid()
         store = database(uri, name, True)
     # the synchronous answers of a daemon built with the sanitizers take
     # longer than the default --max-seconds
-    p = subprocess.Popen([daemon, "--port", "0", "--quiet", "--job-store",
-                          store, "--job-workers", "1", "--max-seconds", "300"],
-                         stderr=subprocess.PIPE, stdout=subprocess.DEVNULL,
-                         text=True)
+    p, port = start(daemon, "--job-store", store, "--job-workers", "1",
+                    "--max-seconds", "300")
     try:
-        m = re.search(r":(\d+)$", p.stderr.readline().strip())
-        if not m:
-            sys.exit("the daemon did not start")
-        port = int(m.group(1))
         check_map(port)
         check_basins(port)
     finally:
@@ -190,10 +163,7 @@ def main():
         p.wait()
         if name:
             database(uri, name, False)
-    if FAILURES:
-        print("%d failures" % len(FAILURES))
-        return 1
-    return 0
+    return outcome()
 
 
 if __name__ == "__main__":

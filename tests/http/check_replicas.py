@@ -18,18 +18,17 @@ I/O thread.  Once the proxy thaws, the waiting requests are answered.
 Usage: check_replicas.py STICKSLIPD @URI_FILE   (the CTest fixture pg
 writes URI_FILE; without it the check is skipped, 77)
 """
-import http.client
 import json
-import os
 import re
 import signal
 import socket
-import subprocess
 import sys
 import threading
 import time
 
-PAPER = {"chi": 0.2, "eta": 4, "us": 0.0724, "ur": 0.6178, "V": 1}
+import jobcheck
+from jobcheck import PAPER, check, outcome, pg_uri
+
 ITEMS = 32 * 24  # 24 chunks of 32 items and the done line
 
 
@@ -37,28 +36,14 @@ PROCS = []
 
 
 def start(daemon, uri, lease="1"):
-    p = subprocess.Popen(
-        [daemon, "--port", "0", "--quiet", "--job-store", uri,
-         "--job-lease", lease, "--job-workers", "1"],
-        stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True)
+    p, port = jobcheck.start(daemon, "--job-store", uri, "--job-lease",
+                             lease, "--job-workers", "1")
     PROCS.append(p)
-    line = p.stderr.readline()
-    m = re.search(r":(\d+)$", line.strip())
-    if not m:
-        p.kill()
-        sys.exit("the daemon did not start: " + line)
-    return p, int(m.group(1))
+    return p, port
 
 
 def call(port, method, path, body=None, headers=None, timeout=120):
-    c = http.client.HTTPConnection("127.0.0.1", port, timeout=timeout)
-    h = {"Content-Type": "application/json"}
-    h.update(headers or {})
-    c.request(method, path, None if body is None else json.dumps(body), h)
-    r = c.getresponse()
-    data = r.read().decode()
-    c.close()
-    return r.status, dict(r.getheaders()), data
+    return jobcheck.call(port, method, path, body, headers, timeout)
 
 
 def chunks_done(port):
@@ -120,7 +105,7 @@ class Proxy:
                 pass
 
 
-def check_stalled_store(daemon, uri, check):
+def check_stalled_store(daemon, uri):
     m = re.match(r"(postgresql://[^@]*@)([^:/]+):(\d+)(/.*)$", uri)
     proxy = Proxy(m.group(2), int(m.group(3)))
     # a long lease: no renewal is due while the store hangs
@@ -169,20 +154,9 @@ def check_stalled_store(daemon, uri, check):
 
 
 def main():
-    daemon, uri_arg = sys.argv[1], sys.argv[2]
-    try:
-        with open(uri_arg.lstrip("@")) as f:
-            uri = f.read().strip()
-    except OSError:
-        print("no PostgreSQL (%s unreadable): skipped" % uri_arg)
+    daemon, uri = sys.argv[1], pg_uri(sys.argv[2])
+    if uri is None:
         return 77
-    failures = []
-
-    def check(ok, what):
-        print(("ok   " if ok else "FAIL ") + what)
-        if not ok:
-            failures.append(what)
-
     batch = {"requests": [
         {"id": i, "path": "/simulate",
          "body": {"params": PAPER, "initial": [0.1 + 1e-4 * i, 0, 0, 1],
@@ -244,16 +218,13 @@ def main():
               "each item's answer is the synchronous one (first 64)")
         print("chunks: A %d, B %d (before it was killed)"
               % (chunks_done(pa), cb))
-        check_stalled_store(daemon, uri, check)
+        check_stalled_store(daemon, uri)
     finally:
         for p in PROCS:
             if p.poll() is None:
                 p.terminate()
                 p.wait()
-    if failures:
-        print("%d failures" % len(failures))
-        return 1
-    return 0
+    return outcome()
 
 
 if __name__ == "__main__":
