@@ -7,7 +7,8 @@
 # connections; and what the daemon's CPU (from /proc) costs for an /orbit
 # from a guess, one /batch item or one request alone, against bench_orbit's
 # solve of the same orbit in the same run, with perf's split of the batch's
-# cycles by library when perf is installed.
+# cycles by library, and by part (kernel, malloc and free, the rest of libc,
+# jansson, the computation, the codec and server) when perf is installed.
 # Usage: bench/load.sh [build-dir] [seconds] [connections]
 # Writes bench/results/load.md.  Installs wrk when run as root and missing.
 set -euo pipefail
@@ -218,6 +219,29 @@ if command -v perf >/dev/null && perf record -q -o "$tmp/perf.data" -p "$pid" --
     echo "| --- | ---: |"
     perf report -i "$tmp/perf.data" --no-children --sort dso -g none 2>/dev/null |
       awk '/^ +[0-9.]+%/ && $1 + 0 >= 0.5 {printf "| %s | %s |\n", $2, $1}'
+    # by what the cycles do: the library's functions (nm of libstickslip.a)
+    # with GSL and libm are the computation; libc's allocator apart
+    echo
+    echo "The same cycles by what they do (the computation: libstickslip's functions, GSL, libm):"
+    echo
+    echo "| part | share |"
+    echo "| --- | ---: |"
+    nm --defined-only "$build/libstickslip.a" 2>/dev/null | awk 'NF == 3 && $2 ~ /[tT]/ {print $3}' >"$tmp/core.syms"
+    perf report -i "$tmp/perf.data" --no-children --sort dso,sym -g none 2>/dev/null |
+      awk -v syms="$tmp/core.syms" '
+        BEGIN { while ((getline s < syms) > 0) core[s] = 1 }
+        /^ +[0-9.]+%/ {
+          p = $1 + 0; dso = $2; sym = $4; sub(/\..*/, "", sym)
+          if (dso ~ /kernel/) part = "kernel"
+          else if (dso ~ /^libc/ && sym ~ /malloc|free|_int_|consolidate|unlink_chunk|tcache|realloc|calloc/) part = "libc: malloc and free"
+          else if (dso ~ /^libc/) part = "libc: the rest (memcpy, strtod, send...)"
+          else if (dso ~ /jansson/) part = "jansson"
+          else if (dso ~ /gsl|^libm/ || (dso == "stickslipd" && sym in core)) part = "computation"
+          else if (dso == "stickslipd") part = "stickslipd: codec and server"
+          else part = "other"
+          share[part] += p
+        }
+        END { for (k in share) printf "| %s | %.1f %% |\n", k, share[k] }' | sort
   } >> "$out"
 fi
 echo "wrote $out"

@@ -33,10 +33,25 @@ static void safe_key(const char *k, char *out, size_t n) {
   out[j] = 0;
 }
 
+/* Append @a s to out[*j], within n - 1 bytes. */
+static void put_cut(char *out, size_t n, size_t *j, const char *s) {
+  size_t m = strlen(s);
+  if (m > n - 1 - *j)
+    m = n - 1 - *j;
+  memcpy(out + *j, s, m);
+  *j += m;
+}
+
+/* "ptr/key", cut to n - 1 bytes as snprintf would, without its format
+ * parsing: every field of every request passes here. */
 static void join(char *out, size_t n, const char *ptr, const char *key) {
   char k[48];
+  size_t j = 0;
   safe_key(key, k, sizeof k);
-  snprintf(out, n, "%s/%s", ptr, k);
+  put_cut(out, n, &j, ptr);
+  put_cut(out, n, &j, "/");
+  put_cut(out, n, &j, k);
+  out[j] = 0;
 }
 
 /* A field is given when its key is there with a non-null value. */

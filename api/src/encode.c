@@ -75,57 +75,136 @@ json_t *api__samples(const ss_sim_result *r, const api_params *ap,
   return s;
 }
 
-json_t *api__phases(int n, const ss_mode *modes, const double *tau,
-                    const api_params *ap) {
-  json_t *a = json_array();
-  for (int k = 0; k < n; k++) {
-    json_t *p = json_object();
-    api__set(p, "mode", json_string(ss_mode_name(modes[k])));
-    api__set(p, "duration", api__real(api__time_out(ap, tau[k])));
-    json_array_append_new(a, p);
+/* [x0, ..., xn-1] */
+void api__w_vec(api_wbuf *w, const double *x, int n) {
+  API_W_LIT(w, "[");
+  for (int i = 0; i < n; i++) {
+    if (i)
+      API_W_LIT(w, ",");
+    api__w_real(w, x[i]);
   }
-  return a;
+  API_W_LIT(w, "]");
+}
+
+void api__w_state(api_wbuf *w, const api_params *ap, const double x[4]) {
+  double y[4];
+  ss_to_physical(ap->omega, 0, x, NULL, y);
+  api__w_vec(w, y, 4);
+}
+
+/* Phase i of the orbit a: {mode, duration}. */
+static void phase_item(api_wbuf *w, const api_lazy *l, size_t i) {
+  const ss_orbit *o = l->a;
+  const char *m = ss_mode_name(o->modes[i]);
+  API_W_LIT(w, "{\"mode\":");
+  api__w_str(w, m, strlen(m));
+  API_W_LIT(w, ",\"duration\":");
+  api__w_real(w, api__time_out(l->b, o->durations[i]));
+  API_W_LIT(w, "}");
+}
+
+json_t *api__phases(const api_call *c, const ss_orbit *o,
+                    const api_params *ap) {
+  return api__lazy(c, (size_t)o->n_phases, phase_item, o, ap, 0, 0);
+}
+
+void api__w_phases(api_wbuf *w, const ss_orbit *o, const api_params *ap) {
+  api_lazy l = {NULL,          phase_item, o, ap, 0, (size_t)o->n_phases,
+                API_LAZY_ARRAY};
+  API_W_LIT(w, "[");
+  for (size_t i = 0; i < l.n; i++) {
+    if (i)
+      API_W_LIT(w, ",");
+    phase_item(w, &l, i);
+  }
+  API_W_LIT(w, "]");
 }
 
 /* In physical units the map acts on (z1, z1'): J' = D J D^-1 with
  * D = diag(1, omega). */
-json_t *api__jacobian(const double J[2][2], const api_params *ap) {
-  json_t *a = json_array();
+static void w_jacobian(api_wbuf *w, const double J[2][2],
+                       const api_params *ap) {
+  API_W_LIT(w, "[");
   for (int i = 0; i < 2; i++) {
-    json_t *row = json_array();
+    double row[2];
     for (int j = 0; j < 2; j++) {
       double s = (i == 1 ? ap->omega : 1) / (j == 1 ? ap->omega : 1);
-      json_array_append_new(row, api__real(J[i][j] * s));
+      row[j] = J[i][j] * s;
     }
-    json_array_append_new(a, row);
+    if (i)
+      API_W_LIT(w, ",");
+    api__w_vec(w, row, 2);
   }
-  return a;
+  API_W_LIT(w, "]");
 }
 
-static const char *const STAB_NOTE =
+static const char STAB_NOTE[] =
     "Stability of the fixed point of the Poincare map on the section (4.2) "
     "in (z1, z1'): all eigenvalues inside the unit circle means small "
     "perturbations, except during stick, stay near the orbit. This is "
     "neither Lyapunov nor orbital stability (the paper, section 4).";
 
-json_t *api__stability(const ss_stab *st, const api_params *ap) {
-  json_t *s = json_object(), *ev = json_array();
-  for (int i = 0; i < 2; i++) {
-    json_t *p = json_array();
-    json_array_append_new(p, api__real(st->eig_re[i]));
-    json_array_append_new(p, api__real(st->eig_im[i]));
-    json_array_append_new(ev, p);
+static void w_bool(api_wbuf *w, int v) {
+  if (v)
+    API_W_LIT(w, "true");
+  else
+    API_W_LIT(w, "false");
+}
+
+/* The members of the stability object of l->a in the units of l->b; with
+ * its braces when l->k. */
+static void stability_item(api_wbuf *w, const api_lazy *l, size_t i) {
+  const ss_stab *st = l->a;
+  const api_params *ap = l->b;
+  (void)i;
+  if (l->k)
+    API_W_LIT(w, "{");
+  API_W_LIT(w, "\"eigenvalues\":[");
+  for (int e = 0; e < 2; e++) {
+    if (e)
+      API_W_LIT(w, ",");
+    api__w_vec(w, (double[2]){st->eig_re[e], st->eig_im[e]}, 2);
   }
-  api__set(s, "eigenvalues", ev);
-  api__set(s, "spectral_radius", api__real(st->spectral_radius));
-  api__set(s, "stable", json_boolean(st->stable));
-  api__set(s, "unit_margin", api__real(st->unit_margin));
-  api__set(s, "marginal", json_boolean(st->marginal));
-  api__set(s, "jacobian", api__jacobian(st->jac, ap));
+  API_W_LIT(w, "],\"spectral_radius\":");
+  api__w_real(w, st->spectral_radius);
+  API_W_LIT(w, ",\"stable\":");
+  w_bool(w, st->stable);
+  API_W_LIT(w, ",\"unit_margin\":");
+  api__w_real(w, st->unit_margin);
+  API_W_LIT(w, ",\"marginal\":");
+  w_bool(w, st->marginal);
+  API_W_LIT(w, ",\"jacobian\":");
+  w_jacobian(w, st->jac, ap);
   if (!isnan(st->jac_diff)) {
-    api__set(s, "jacobian_fd", api__jacobian(st->jac_fd, ap));
-    api__set(s, "jacobian_difference", api__real(st->jac_diff));
+    API_W_LIT(w, ",\"jacobian_fd\":");
+    w_jacobian(w, st->jac_fd, ap);
+    API_W_LIT(w, ",\"jacobian_difference\":");
+    api__w_real(w, st->jac_diff);
   }
-  api__set(s, "note", json_string(STAB_NOTE));
-  return s;
+  API_W_LIT(w, ",\"note\":");
+  api__w_str(w, STAB_NOTE, sizeof STAB_NOTE - 1);
+  if (l->k)
+    API_W_LIT(w, "}");
+}
+
+json_t *api__stability(const api_call *c, const ss_stab *st,
+                       const api_params *ap) {
+  json_t *o = json_object();
+  if (o && api__set_fields(o, c, stability_item, st, ap, 0) != 0) {
+    json_decref(o);
+    return NULL;
+  }
+  return o;
+}
+
+void api__w_stability(api_wbuf *w, const ss_stab *st, const api_params *ap) {
+  api_lazy l = {NULL, stability_item, st, ap, 1, 1, API_LAZY_VALUE};
+  stability_item(w, &l, 0);
+}
+
+json_t *api__json_of(api_wbuf *w) {
+  json_t *j = w->oom || !w->p ? NULL : json_loadb(w->p, w->len, 0, NULL);
+  free(w->p);
+  memset(w, 0, sizeof *w);
+  return j;
 }

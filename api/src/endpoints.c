@@ -10,6 +10,7 @@
 #include <time.h>
 
 #include "endpoints.h"
+#include "arena.h"
 #include "problem.h"
 #include "writer.h"
 
@@ -206,8 +207,11 @@ int api__handle(size_t index, const char *body, size_t len,
     return out->status;
   }
   const ep_row *ep = &ENDPOINTS[index];
+  api_arena_mark mark; /* the request's tree and the answer's */
+  api__arena_begin(&mark);
   if (ep->pub.run_class != API_RUN_INLINE &&
       !(root = api__parse(body ? body : "", len, lim, &e))) {
+    api__arena_end(&mark);
     api__problem_response(&e, out);
     return out->status;
   }
@@ -217,6 +221,7 @@ int api__handle(size_t index, const char *body, size_t len,
       ep->pub.run_class == API_RUN_COMPUTE && !small) {
     ep->release(x); /* left to the server: out->status 0 */
     json_decref(root);
+    api__arena_end(&mark);
     return 0;
   }
   if (decoded && ep->run(x, &c) == 0 && ep->encode(x, &c, out) == 0 &&
@@ -233,6 +238,7 @@ int api__handle(size_t index, const char *body, size_t len,
     ep->release(x);
   api__lazies_free(&lz);
   json_decref(root);
+  api__arena_end(&mark);
   if (e.set) {
     api_response_free(out);
     if (prefix && e.pointer[0]) {

@@ -305,11 +305,14 @@ static json_t *attractor_json(const basins_x *x, const ss_basins *b, int i,
   json_t *j = json_object(), *sec = json_array();
   api__set(j, "label", json_integer(i));
   api__set(j, "kind", json_string(ss_orbit_kind_name(o->kind)));
-  api__set(j, "phases", api__phases(o->n_phases, o->modes, o->durations, ap));
+  api_wbuf w = {NULL, 0, 0, 0};
+  api__w_phases(&w, o, ap);
+  api__set(j, "phases", api__json_of(&w));
   api__set(j, "period", api__real(api__time_out(ap, o->period)));
   api__set(j, "n_turns", json_integer(o->n_turns));
   api__set(j, "x0", api__state(ap, o->x0));
-  api__set(j, "stability", api__stability(&o->stab, ap));
+  api__w_stability(&w, &o->stab, ap);
+  api__set(j, "stability", api__json_of(&w));
   api__set(j, "found_by",
            json_string(a->from_simulation ? "simulation" : "search"));
   /* its returns to Sigma0, (x1, v1) in the request's units */

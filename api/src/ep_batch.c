@@ -22,6 +22,7 @@
 #include <time.h>
 
 #include "endpoints.h"
+#include "arena.h"
 #include "decode.h"
 #include "job.h"
 #include "problem.h"
@@ -217,9 +218,12 @@ int api_batch_open(const char *body, size_t len, const api_limits *lim,
   api_call c = {lim, NULL, &e, NULL};
   memset(&e, 0, sizeof e);
   memset(out, 0, sizeof *out);
+  api_arena_mark mark; /* the batch's tree, freed once its items are kept */
+  api__arena_begin(&mark);
   json_t *root = api__parse(body ? body : "", len, lim, &e);
   *b = root ? batch_of(root, &c) : NULL;
   json_decref(root);
+  api__arena_end(&mark);
   if (!*b) {
     api__problem_response(&e, out);
     return -1;

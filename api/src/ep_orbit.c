@@ -2,6 +2,7 @@
  * ep_orbit.c: POST /orbit, the periodic orbits for given parameters, with
  * no guess (the core's search) or from a guess of the phase durations.
  */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -234,63 +235,121 @@ int ep_orbit_run(void *xp, const api_call *c) {
 
 /* A margin: its value stays dimensionless (velocities in units of V's,
  * forces as chi (x2 - x1), in units of k1 + k2), its place t in the time unit
- * of the request. */
-static json_t *margin_json(const ss_margin *mg, const api_params *ap) {
-  json_t *o = json_object();
-  api__set(o, "value", api__real(mg->value));
+ * of the request; the condition it measures when @a condition. */
+static void w_margin(api_wbuf *w, const ss_margin *mg, const api_params *ap,
+                     const char *condition) {
+  API_W_LIT(w, "{\"value\":");
+  api__w_real(w, mg->value);
   if (mg->phase >= 0) {
-    api__set(o, "phase", json_integer(mg->phase));
-    api__set(o, "t", api__real(api__time_out(ap, mg->t)));
+    char num[24];
+    API_W_LIT(w, ",\"phase\":");
+    api__w_put(w, num, (size_t)snprintf(num, sizeof num, "%d", mg->phase));
+    API_W_LIT(w, ",\"t\":");
+    api__w_real(w, api__time_out(ap, mg->t));
   }
-  return o;
+  if (condition) {
+    API_W_LIT(w, ",\"condition\":");
+    api__w_str(w, condition, strlen(condition));
+  }
+  API_W_LIT(w, "}");
 }
 
-static json_t *margins_json(const ss_orbit *o, const api_params *ap) {
-  json_t *mg = json_object();
+static void w_margins(api_wbuf *w, const ss_orbit *o, const api_params *ap) {
   const ss_margin *each[] = {&o->slip_below,  &o->over_above, &o->stick_upper,
                              &o->stick_lower, &o->switching,  &o->transversal};
-  for (int k = 0; k < 6; k++) /* SS_MARGIN_SLIP_BELOW_V .. _TRANSVERSALITY */
-    api__set(mg, ss_margin_name((ss_margin_id)(SS_MARGIN_SLIP_BELOW_V + k)),
-             margin_json(each[k], ap));
-  api__set(mg, "min", margin_json(&o->min_margin, ap));
-  api__set(mg, "units",
-           json_string(ap->has_physical ? "values dimensionless; t in the "
-                                          "time unit of the request"
-                                        : "dimensionless"));
-  return mg;
+  static const char UNITS[] =
+      "values dimensionless; t in the time unit of the request";
+  API_W_LIT(w, "{");
+  for (int k = 0; k < 6; k++) { /* SS_MARGIN_SLIP_BELOW_V .. _TRANSVERSALITY */
+    const char *name =
+        ss_margin_name((ss_margin_id)(SS_MARGIN_SLIP_BELOW_V + k));
+    api__w_str(w, name, strlen(name));
+    API_W_LIT(w, ":");
+    w_margin(w, each[k], ap, NULL);
+    API_W_LIT(w, ",");
+  }
+  API_W_LIT(w, "\"min\":");
+  w_margin(w, &o->min_margin, ap, NULL);
+  API_W_LIT(w, ",\"units\":");
+  if (ap->has_physical)
+    api__w_str(w, UNITS, sizeof UNITS - 1);
+  else
+    API_W_LIT(w, "\"dimensionless\"");
+  API_W_LIT(w, "}");
 }
 
+/* The margins of orbit l->a (k 0), or its violation (k 1), in the units of
+ * l->b. */
+static void margins_item(api_wbuf *w, const api_lazy *l, size_t i) {
+  const ss_orbit *o = l->a;
+  (void)i;
+  if (l->k)
+    w_margin(w, &o->violation, l->b, ss_margin_name(o->violation_id));
+  else
+    w_margins(w, o, l->b);
+}
+
+static void w_key_int(api_wbuf *w, const char *key, long long v) {
+  char num[48];
+  api__w_put(w, num, (size_t)snprintf(num, sizeof num, ",\"%s\":%lld", key, v));
+}
+
+/* The members of orbit l->a, in the units of l->b, but for its samples. */
+static void orbit_item(api_wbuf *w, const api_lazy *l, size_t i) {
+  const ss_orbit *o = l->a;
+  const api_params *ap = l->b;
+  const char *kind = ss_orbit_kind_name(o->kind);
+  const char *source = ss_orbit_source_name(o->source);
+  (void)i;
+  API_W_LIT(w, "\"kind\":");
+  api__w_str(w, kind, strlen(kind));
+  API_W_LIT(w, ",\"phases\":");
+  api__w_phases(w, o, ap);
+  API_W_LIT(w, ",\"period\":");
+  api__w_real(w, api__time_out(ap, o->period));
+  w_key_int(w, "n_turns", o->n_turns);
+  API_W_LIT(w, ",\"z0\":");
+  api__w_state(w, ap, o->z0);
+  API_W_LIT(w, ",\"x0\":");
+  api__w_state(w, ap, o->x0);
+  API_W_LIT(w, ",\"margins\":");
+  w_margins(w, o, ap);
+  API_W_LIT(w, ",\"residual\":");
+  api__w_real(w, o->residual);
+  API_W_LIT(w, ",\"closure\":");
+  api__w_real(w, o->closure);
+  API_W_LIT(w, ",\"stability\":");
+  api__w_stability(w, &o->stab, ap);
+  w_key_int(w, "iterations", o->iterations);
+  API_W_LIT(w, ",\"source\":");
+  api__w_str(w, source, strlen(source));
+}
+
+/* An orbit: its members written from @a o when the answer is, and its
+ * samples, a lazy array each column. */
 static json_t *orbit_json(const ss_orbit *o, const ss_sim_result *path,
                           const api_params *ap, unsigned columns,
                           const api_call *c) {
   json_t *j = json_object();
-  api__set(j, "kind", json_string(ss_orbit_kind_name(o->kind)));
-  api__set(j, "phases", api__phases(o->n_phases, o->modes, o->durations, ap));
-  api__set(j, "period", api__real(api__time_out(ap, o->period)));
-  api__set(j, "n_turns", json_integer(o->n_turns));
-  api__set(j, "z0", api__state(ap, o->z0));
-  api__set(j, "x0", api__state(ap, o->x0));
-  api__set(j, "margins", margins_json(o, ap));
-  api__set(j, "residual", api__real(o->residual));
-  api__set(j, "closure", api__real(o->closure));
-  api__set(j, "stability", api__stability(&o->stab, ap));
-  api__set(j, "iterations", json_integer(o->iterations));
-  api__set(j, "source", json_string(ss_orbit_source_name(o->source)));
-  if (path && path->n_samples)
-    api__set(j, "samples", api__samples(path, ap, columns, c));
+  if (api__set_fields(j, c, orbit_item, o, ap, 0) ||
+      (path && path->n_samples &&
+       api__set(j, "samples", api__samples(path, ap, columns, c)))) {
+    json_decref(j);
+    return NULL;
+  }
   return j;
 }
 
 /* The rejected root closest to feasible: its sequence, the condition it
  * fails by how much, where, and its margins up to that phase. */
-static json_t *rejected_json(const ss_orbit_report *rep, const api_params *ap) {
+static json_t *rejected_json(const ss_orbit_report *rep, const api_params *ap,
+                             const api_call *c) {
   const ss_orbit *o = &rep->rejected;
-  json_t *j = json_object(), *v = margin_json(&o->violation, ap);
+  json_t *j = json_object();
   api__set(j, "kind", json_string(ss_orbit_kind_name(o->kind)));
-  api__set(j, "phases", api__phases(o->n_phases, o->modes, o->durations, ap));
-  api__set(v, "condition", json_string(ss_margin_name(o->violation_id)));
-  api__set(j, "violation", v);
-  api__set(j, "margins", margins_json(o, ap));
+  api__set(j, "phases", api__phases(c, o, ap));
+  api__set(j, "violation", api__raw(c, margins_item, o, ap, 1));
+  api__set(j, "margins", api__raw(c, margins_item, o, ap, 0));
   api__set(j, "reason", json_string(rep->reason));
   return j;
 }
@@ -369,7 +428,7 @@ int ep_orbit_encode(const void *xp, const api_call *c, api_response *out) {
   if (x->n == 0 && x->rep.reason[0])
     api__set(o, "reason", json_string(x->rep.reason));
   if (x->rep.has_rejected)
-    api__set(o, "rejected", rejected_json(&x->rep, &x->ap));
+    api__set(o, "rejected", rejected_json(&x->rep, &x->ap, c));
   api__set(o, "search", search_json(x));
   return api__answer(o, &SPEC, x, &x->ap, c, out);
 }

@@ -112,7 +112,7 @@ int ep_stability_encode(const void *xp, const api_call *c, api_response *out) {
   const stab_x *x = xp;
   const ss_params *p = &x->m.p;
   const double *z0 = x->o.z0;
-  json_t *o = api__stability(&x->st, &x->ap);
+  json_t *o = api__stability(c, &x->st, &x->ap);
   double sec = p->chi * (z0[1] - z0[0]) - (p->ur - p->us);
   double sec2 = z0[3] - p->V;
   api__set(o, "section_residual", api__real(fmax(fabs(sec), fabs(sec2))));

@@ -11,6 +11,7 @@
 
 #include <jansson.h>
 
+#include "arena.h"
 #include "problem.h"
 #include "shortest.h"
 
@@ -209,7 +210,7 @@ static void respond(api_response *out, api_problem_kind kind,
     json_object_set_new(o, "limit_value", json_real(limit_value));
   }
   out->status = row->status;
-  out->body = json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII);
+  out->body = api__json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII);
   out->len = out->body ? strlen(out->body) : 0;
   out->content_type = "application/problem+json";
   out->held = out->len;

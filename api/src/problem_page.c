@@ -12,6 +12,7 @@
 
 #include <jansson.h>
 
+#include "arena.h"
 #include "problem.h"
 #include "values.h"
 #include "writer.h"
@@ -227,7 +228,7 @@ static char *json_page(const page *p, const int *status, int n_status) {
   api__set(o, "status", st);
   api__set(o, "meaning", json_string(p->meaning));
   api__set(o, "fix", json_string(p->fix));
-  char *s = json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII);
+  char *s = api__json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII);
   json_decref(o);
   return s;
 }

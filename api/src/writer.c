@@ -38,15 +38,6 @@ static void w_grow(api_wbuf *b, size_t n) {
 
 void api__w_room(api_wbuf *b, size_t n) { w_grow(b, n); }
 
-void api__w_put(api_wbuf *b, const char *s, size_t n) {
-  w_grow(b, n);
-  if (b->oom)
-    return;
-  memcpy(b->p + b->len, s, n);
-  b->len += n;
-  b->p[b->len] = 0;
-}
-
 void api__w_str(api_wbuf *b, const char *s, size_t n) {
   static const char hex[] = "0123456789abcdef";
   api__w_put(b, "\"", 1);
@@ -88,8 +79,9 @@ void api__w_real(api_wbuf *b, double v) {
  * writer checks the pointer too, so no request text can pose as one. */
 #define LAZY_TAG "\001lazy"
 
-json_t *api__lazy(const api_call *c, size_t n, api_item_fn *item, const void *a,
-                  const void *b, int k, size_t held) {
+static json_t *lazy_new(const api_call *c, size_t n, api_item_fn *item,
+                        const void *a, const void *b, int k, size_t held,
+                        api_lazy_form form) {
   api_lazies *lz = c->lazy;
   if (!lz) /* api_handle always gives one */
     return NULL;
@@ -106,9 +98,27 @@ json_t *api__lazy(const api_call *c, size_t n, api_item_fn *item, const void *a,
   json_t *marker = json_string(tag);
   if (!marker)
     return NULL;
-  lz->v[lz->n++] = (api_lazy){marker, item, a, b, k, n};
+  lz->v[lz->n++] = (api_lazy){marker, item, a, b, k, n, form};
   lz->held += held;
   return marker;
+}
+
+json_t *api__lazy(const api_call *c, size_t n, api_item_fn *item, const void *a,
+                  const void *b, int k, size_t held) {
+  return lazy_new(c, n, item, a, b, k, held, API_LAZY_ARRAY);
+}
+
+json_t *api__raw(const api_call *c, api_item_fn *item, const void *a,
+                 const void *b, int k) {
+  return lazy_new(c, 1, item, a, b, k, 0, API_LAZY_VALUE);
+}
+
+/* The members go in under a key of their own, the marker's text: unique in
+ * the object, and in the order it was set. */
+int api__set_fields(json_t *o, const api_call *c, api_item_fn *item,
+                    const void *a, const void *b, int k) {
+  json_t *m = lazy_new(c, 1, item, a, b, k, 0, API_LAZY_FIELDS);
+  return m ? json_object_set_new(o, json_string_value(m), m) : -1;
 }
 
 void api__lazies_free(api_lazies *lz) {
@@ -171,6 +181,11 @@ static void w_value(api_wbuf *b, const json_t *j, const api_lazies *lz,
       if (!first)
         api__w_put(b, ",", 1);
       first = 0;
+      if (json_is_string(v) && (l = lazy_of(lz, v)) != NULL &&
+          l->form == API_LAZY_FIELDS) {
+        l->item(b, l, 0);
+        continue;
+      }
       api__w_str(b, k, strlen(k));
       api__w_put(b, ":", 1);
       w_value(b, v, lz, ct);
@@ -188,7 +203,11 @@ static void w_value(api_wbuf *b, const json_t *j, const api_lazies *lz,
     api__w_put(b, "]", 1);
     break;
   case JSON_STRING:
-    if ((l = lazy_of(lz, j)) != NULL) {
+    if ((l = lazy_of(lz, j)) != NULL && l->form != API_LAZY_ARRAY) {
+      l->item(b, l, 0); /* small: written in place, also in a stream */
+      break;
+    }
+    if (l) {
       api__w_put(b, "[", 1);
       if (ct)
         cut(ct, b, l);

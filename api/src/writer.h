@@ -8,6 +8,7 @@
 
 #include <jansson.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "call.h"
 #include "stickslip_api.h"
@@ -18,24 +19,41 @@ typedef struct api_wbuf {
   int oom;
 } api_wbuf;
 
-/* Append bytes, a JSON string, a number (shortest exact digits; null when
- * not finite). */
-void api__w_put(api_wbuf *b, const char *s, size_t n);
-void api__w_str(api_wbuf *b, const char *s, size_t n);
-void api__w_real(api_wbuf *b, double v);
 /* Room for @a n more bytes (and a NUL) at b->p + b->len, unless b->oom. */
 void api__w_room(api_wbuf *b, size_t n);
+/* Append bytes, a JSON string, a number (shortest exact digits; null when
+ * not finite).  The bytes are put inline: an answer is hundreds of short
+ * pieces, and a call and a memcpy of a few bytes for each cost as much as
+ * the digits. */
+static inline void api__w_put(api_wbuf *b, const char *s, size_t n) {
+  if (b->oom || b->len + n + 1 > b->cap) {
+    api__w_room(b, n);
+    if (b->oom)
+      return;
+  }
+  memcpy(b->p + b->len, s, n);
+  b->len += n;
+  b->p[b->len] = 0;
+}
+void api__w_str(api_wbuf *b, const char *s, size_t n);
+void api__w_real(api_wbuf *b, double v);
 #define API_W_LIT(b, lit) api__w_put(b, lit, sizeof(lit) - 1)
 
 /* A lazy array: n elements, element i written by item() from a, b, k. */
 typedef struct api_lazy api_lazy;
 typedef void api_item_fn(api_wbuf *w, const api_lazy *l, size_t i);
+typedef enum api_lazy_form {
+  API_LAZY_ARRAY,  /* [item 0, ..., item n-1] */
+  API_LAZY_VALUE,  /* one value, written by item 0 */
+  API_LAZY_FIELDS, /* members "k": v, ... of the object it is put in */
+} api_lazy_form;
 struct api_lazy {
   const json_t *marker;
   api_item_fn *item;
   const void *a, *b;
   int k;
   size_t n;
+  api_lazy_form form;
 };
 struct api_lazies {
   api_lazy *v;
@@ -50,6 +68,17 @@ struct api_lazies {
 json_t *api__lazy(const api_call *c, size_t n, api_item_fn *item, const void *a,
                   const void *b, int k, size_t held);
 void api__lazies_free(api_lazies *lz);
+
+/* A small value, or some members of object @a o, written by @a item (its
+ * index 0) straight from @a a and @a b when the answer is written, rather
+ * than built as a tree of values: an orbit's hundred numbers are a few
+ * nodes.  What they read must live as long as the answer's text is being
+ * written (the endpoint's struct).  api__raw: NULL when out of memory;
+ * api__set_fields: 0, or -1 when out of memory. */
+json_t *api__raw(const api_call *c, api_item_fn *item, const void *a,
+                 const void *b, int k);
+int api__set_fields(json_t *o, const api_call *c, api_item_fn *item,
+                    const void *a, const void *b, int k);
 
 /* A 200 application/json answer with the body of @a j (consumed): written
  * whole, or a stream when its lazy arrays are larger than the server's

@@ -7,6 +7,10 @@
  * api's endpoint table.  The expected body is matched as a subset: every
  * key it names must be in the answer with an equal value (numbers to a
  * relative 1e-9); arrays must match in length and element by element.
+ * With shape.txt, the answer's text must also be that text once every
+ * number is written '#': the keys, their order and the compact form that
+ * the writer keeps (the answers are written straight from the core's
+ * structs, not dumped from a tree).
  *
  * The same request is then served as a job (job_runner.c: its chunks in
  * reverse order within each stage), and the job's answer must be the
@@ -154,6 +158,56 @@ static int same_as_job(size_t ep, const char *req, size_t len,
   return same;
 }
 
+/* The shape of a JSON text: every number written as '#', the rest (keys,
+ * their order, strings, nesting, null) as it is. */
+static char *shape_of(const char *t) {
+  size_t n = strlen(t), j = 0;
+  char *s = malloc(n + 1);
+  int in_str = 0;
+  for (size_t i = 0; s && i < n; i++) {
+    char c = t[i];
+    if (in_str) {
+      s[j++] = c;
+      if (c == '\\' && i + 1 < n)
+        s[j++] = t[++i];
+      else if (c == '"')
+        in_str = 0;
+    } else if (c == '"') {
+      s[j++] = c;
+      in_str = 1;
+    } else if (strchr("-0123456789", c)) {
+      while (i + 1 < n && strchr("-+.eE0123456789", t[i + 1]))
+        i++;
+      s[j++] = '#';
+    } else {
+      s[j++] = c;
+    }
+  }
+  if (s)
+    s[j] = 0;
+  return s;
+}
+
+/* The answer's text against shape.txt when the case has one: the keys in
+ * their order, compact, the numbers aside (matched above to 1e-9). */
+static int same_shape(const char *dir, const char *body) {
+  char path[4096];
+  size_t len;
+  snprintf(path, sizeof path, "%s/shape.txt", dir);
+  char *want = slurp(path, &len);
+  if (!want)
+    return 1;
+  while (len && want[len - 1] == '\n')
+    want[--len] = 0;
+  char *got = body ? shape_of(body) : NULL;
+  int ok = got && strcmp(got, want) == 0;
+  if (!ok)
+    fprintf(stderr, "shape: %.2000s\nwanted: %.2000s\n", got ? got : "", want);
+  free(got);
+  free(want);
+  return ok;
+}
+
 int main(int argc, char **argv) {
   char path[4096], where[512] = "";
   size_t len, elen;
@@ -200,6 +254,13 @@ int main(int argc, char **argv) {
       got && st == (int)json_integer_value(json_object_get(want, "status"));
   if (ok)
     ok = subset(json_object_get(want, "body"), got, where, sizeof where);
+  /* EVIDENCE: DESIGN §4 field names are the contract: the text of the
+   * answer, written straight from the core's structs, keeps its keys and
+   * their order */
+  if (ok && !same_shape(argv[1], r.body)) {
+    ok = 0;
+    snprintf(where, sizeof where, "the shape of shape.txt");
+  }
   printf("%s: status %d, %s%s%s\n", base, st, ok ? "as expected" : "differs",
          ok ? "" : " at ", ok ? "" : where);
   if (!ok)
