@@ -561,6 +561,7 @@ enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
   }
   for (unsigned k = 0; k < b->n_run; k++) {
     b->run[k].job.ops = &RUNNER_JOB;
+    b->run[k].job.kind = (unsigned)r->ep; /* counted as the /batch's */
     b->run[k].b = b;
   }
   b->refs = 1; /* the response */

@@ -507,6 +507,7 @@ static const srv_job_ops REQUEST_JOB = {job_queued, job_run, job_done,
 enum MHD_Result srv__submit(struct srv_daemon *d, struct MHD_Connection *c,
                             srv__req *r) {
   r->job.ops = &REQUEST_JOB;
+  r->job.kind = (unsigned)r->ep; /* the row of its endpoint in the metrics */
   int rc = srv_pool_submit(d->pool, &r->job, r->key);
   if (rc == 0)
     return MHD_YES; /* suspended by job_queued; resumed by job_done */

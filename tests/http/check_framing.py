@@ -317,9 +317,23 @@ def value(text, series):
     return float(m.group(1)) if m else None
 
 
+def queued_by(text):
+    """stickslip_queued_requests by endpoint: every endpoint that computes is
+    there (orbit, stability, map, batch, jobs...); the nonzero ones, and
+    simulate's whatever it is."""
+    got = {k: int(v) for k, v in re.findall(
+        r'^stickslip_queued_requests\{endpoint="([^"]*)"\} (\d+)$', text,
+        re.M)}
+    want = {"orbit", "simulate", "stability", "continue", "map", "basins",
+            "batch", "jobs"}
+    if not want <= set(got) or "health" in got:
+        return {"series": sorted(got)}
+    return {k: v for k, v in got.items() if v or k == "simulate"}
+
+
 def check_metrics(binary):
-    """Busy workers, the queue, batch items by path and status, and buckets
-    up to a minute: present, and moving."""
+    """Busy workers, the queue and what it holds by endpoint, batch items by
+    path and status, and buckets up to a minute: present, and moving."""
     d = Daemon(binary, "--quiet", "--workers", "1", "--client-workers", "1",
                *LONG_FLAGS)
     try:
@@ -328,22 +342,27 @@ def check_metrics(binary):
               value(before, "stickslip_workers") == 1 and
               value(before, "stickslip_queued") == 0 and
               'le="60"' in before and 'le="2.5"' in before)
+        ok = queued_by(before) == {"simulate": 0} and ok
         long_c = []
-        for _ in range(2):  # one runs, one waits
+        # one runs, one waits, and a cheap /stability waits behind them
+        for path, body in (("/simulate", LONG_SIM), ("/simulate", LONG_SIM),
+                           ("/stability", "{}")):
             s = socket.create_connection(("127.0.0.1", d.port))
-            s.sendall(POST.encode() + b"Content-Length: %d\r\n\r\n" %
-                      len(LONG_SIM) + LONG_SIM.encode())
+            s.sendall(POST.replace("/simulate", path).encode() +
+                      b"Content-Length: %d\r\n\r\n" % len(body) +
+                      body.encode())
             long_c.append(s)
         end, busy = time.time() + 10, None
         while time.time() < end:
             busy = metrics(d)
             if (value(busy, "stickslip_workers_busy") == 1 and
-                    value(busy, "stickslip_queued") == 1):
+                    value(busy, "stickslip_queued") == 2):
                 break
             time.sleep(0.05)
         ok = (value(busy, "stickslip_workers_busy") == 1 and
-              value(busy, "stickslip_queued") == 1 and
-              value(busy, "stickslip_queued_clients") == 1) and ok
+              value(busy, "stickslip_queued") == 2 and
+              value(busy, "stickslip_queued_clients") == 1 and
+              queued_by(busy) == {"simulate": 1, "stability": 1}) and ok
         for s in long_c:
             s.close()
         body = json.dumps({"requests": [
@@ -360,13 +379,16 @@ def check_metrics(binary):
         items = dict(re.findall(
             r'^stickslip_batch_items_total\{(endpoint="[^"]*",code="\d+")\} '
             r"(\d+)$", after, re.M))
-        ok = (items.get('endpoint="simulate",code="200"') == "2" and
+        ok = (queued_by(after) == {"simulate": 0} and
+              items.get('endpoint="simulate",code="200"') == "2" and
               items.get('endpoint="simulate",code="422"') == "1" and
               items.get('endpoint="other",code="404"') == "1") and ok
         if not ok:
-            print("  metrics: busy %s queued %s, items %s" %
+            print("  metrics: busy %s queued %s (%s; before %s, after %s), "
+                  "items %s" %
                   (value(busy, "stickslip_workers_busy"),
-                   value(busy, "stickslip_queued"), items))
+                   value(busy, "stickslip_queued"), queued_by(busy),
+                   queued_by(before), queued_by(after), items))
         return ok
     finally:
         d.stop()
