@@ -19,9 +19,11 @@
  * most BATCH_BUFFER bytes of lines not yet written (a runner takes no item
  * beyond that; the lines being written restart the runners), so a batch holds
  * little whatever its client reads.  When no line is ready the response's
- * reader suspends the connection, and the end of the next run resumes it.  When
- * the client goes away the runners that wait are dropped and the one that runs
- * is told to stop, as for any request.
+ * reader suspends the connection, and the end of the next run resumes it.  The
+ * reader never waits for a runner's hold of the batch: a runner descheduled
+ * while it holds it would stop the I/O thread, and every connection, for a
+ * time slice (batch_read).  When the client goes away the runners that wait
+ * are dropped and the one that runs is told to stop, as for any request.
  */
 #include <pthread.h>
 #include <stdio.h>
@@ -77,8 +79,11 @@ struct srv__batch {
   char *last; /* the last line, once every item's line is written */
   size_t last_len, last_off;
   int waiting; /* the connection is suspended until a line is ready */
-  int refs;    /* the response, and each runner in the pool */
-  long held;   /* bytes counted against the memory budget */
+  /* the reader found b->mu taken and suspended the connection: the runner
+   * that lets go of it resumes it (runner_unlock) */
+  atomic_int kick;
+  atomic_int refs; /* the response, and each runner in the pool */
+  long held;       /* bytes counted against the memory budget */
   double t0;
   size_t sent; /* bytes of the answer written */
   /* gzip: each piece of lines deflated with a sync flush, so that the
@@ -239,6 +244,20 @@ static int claim(srv__batch *b, runner *ru, size_t *i) {
   return rc;
 }
 
+/* b->mu let go by a runner, which holds a reference to the batch: the
+ * reader, if it found the lock taken (batch_read), resumed.  The flag is
+ * read after the lock is let go, so that a reader that sets it after a
+ * runner's last look finds the lock free on its second try. */
+static void runner_unlock(srv__batch *b) {
+  pthread_mutex_unlock(&b->mu);
+  while (atomic_load(&b->kick)) {
+    pthread_mutex_lock(&b->mu);
+    if (atomic_exchange(&b->kick, 0) && b->c)
+      MHD_resume_connection(b->c);
+    pthread_mutex_unlock(&b->mu);
+  }
+}
+
 /* A run: the batch's next items, one after another, each line into the
  * batch's buffer, until the slice is used up or no item may be taken. */
 static void runner_run(srv_job *j) {
@@ -252,7 +271,7 @@ static void runner_run(srv_job *j) {
     size_t i;
     pthread_mutex_lock(&b->mu);
     int what = claim(b, ru, &i);
-    pthread_mutex_unlock(&b->mu);
+    runner_unlock(b);
     if (!what)
       break;
     api_response ar;
@@ -276,7 +295,7 @@ static void runner_run(srv_job *j) {
       woke = 1;
       MHD_resume_connection(b->c);
     }
-    pthread_mutex_unlock(&b->mu);
+    runner_unlock(b);
     if (ru->cap > BATCH_BUFFER) { /* a large line: its room not kept */
       free(ru->text);
       ru->text = NULL;
@@ -297,7 +316,6 @@ static void runner_done(srv_job *j) {
   pthread_mutex_lock(&b->mu);
   ru->in_pool = 0;
   b->in_pool--;
-  b->refs--;
   if (j->state == SRV_JOB_CANCELLED && batch_gone(b)) {
     atomic_store(&b->gone, 1);
     srv_metrics_cancelled(b->d->metrics);
@@ -312,9 +330,10 @@ static void runner_done(srv_job *j) {
     b->waiting = 0;
     MHD_resume_connection(b->c);
   }
-  int last = b->refs == 0;
-  pthread_mutex_unlock(&b->mu);
-  if (last)
+  runner_unlock(b);
+  /* the runner's reference, dropped without the lock, which the reader
+   * may be trying for */
+  if (atomic_fetch_sub(&b->refs, 1) == 1)
     batch_free(b);
 }
 
@@ -362,7 +381,7 @@ static void dispatch(srv__batch *b) {
     } else {
       ru->in_pool = 1;
       b->in_pool++;
-      b->refs++;
+      atomic_fetch_add(&b->refs, 1);
     }
   }
 }
@@ -385,7 +404,22 @@ static ssize_t batch_read(void *cls, uint64_t pos, char *buf, size_t max) {
   srv__batch *b = cls;
   size_t got = 0;
   (void)pos;
-  pthread_mutex_lock(&b->mu);
+  if (pthread_mutex_trylock(&b->mu) != 0) {
+    /* A runner holds the batch, and a worker may be descheduled while it
+     * does (a time slice, milliseconds, on a loaded machine): the I/O
+     * thread, which every connection waits for, does not wait for it.  The
+     * connection is suspended until the runner lets go (runner_unlock);
+     * when the lock is free by the second try, the runner let go before it
+     * could see the flag, and the reader resumes itself. */
+    atomic_store(&b->kick, 1);
+    MHD_suspend_connection(b->c);
+    if (pthread_mutex_trylock(&b->mu) == 0) {
+      if (atomic_exchange(&b->kick, 0))
+        MHD_resume_connection(b->c);
+      pthread_mutex_unlock(&b->mu);
+    }
+    return 0;
+  }
   if (atomic_load(&b->gone) || b->broken) {
     pthread_mutex_unlock(&b->mu);
     return MHD_CONTENT_READER_END_WITH_ERROR;
@@ -502,10 +536,7 @@ static ssize_t batch_reader(void *cls, uint64_t pos, char *buf, size_t max) {
 /* The response is done with the batch. */
 static void batch_release(void *cls) {
   srv__batch *b = cls;
-  pthread_mutex_lock(&b->mu);
-  int last = --b->refs == 0;
-  pthread_mutex_unlock(&b->mu);
-  if (last)
+  if (atomic_fetch_sub(&b->refs, 1) == 1)
     batch_free(b);
 }
 
@@ -561,9 +592,10 @@ enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
   }
   for (unsigned k = 0; k < b->n_run; k++) {
     b->run[k].job.ops = &RUNNER_JOB;
+    b->run[k].job.kind = (unsigned)r->ep; /* counted as the /batch's */
     b->run[k].b = b;
   }
-  b->refs = 1; /* the response */
+  atomic_init(&b->refs, 1); /* the response */
   b->t0 = r->t0;
   if (r->gzip && (b->gz_in = malloc(SRV__STREAM_CHUNK)) &&
       deflateInit2(&b->zs, SRV__GZIP_LEVEL, Z_DEFLATED, 15 + 16, 8,

@@ -32,9 +32,7 @@ double srv__now(void) {
 
 static char *metrics_text(void *cls) {
   struct srv_daemon *d = cls;
-  srv_pool_load_t load;
-  srv_pool_load(d->pool, &load);
-  srv_metrics_pool(d->metrics, &load);
+  srv_metrics_pool(d->metrics, d->pool);
   if (d->jobs)
     srv__jobs_metrics(d->jobs);
   return srv_metrics_render(d->metrics);
@@ -183,7 +181,9 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     if (s)
       snprintf(d->etags[i], sizeof d->etags[i], "\"%016llx\"", h);
   }
-  srv_pool_cfg pc = {cfg->workers, cfg->client_workers, cfg->client_queue};
+  /* the jobs waiting are counted by the rows of the metrics */
+  srv_pool_cfg pc = {cfg->workers, cfg->client_workers, cfg->client_queue,
+                     (unsigned)srv_metrics_jobs_row() + 1};
   if (!(d->metrics = srv_metrics_new()) || !(d->pool = srv_pool_new(&pc)) ||
       !(d->held = srv__tally_new()) || !(d->conns = srv__tally_new())) {
     daemon_free(d);

@@ -35,6 +35,7 @@ typedef struct ep_metrics {
   atomic_ulong job_items; /* items of jobs' chunks on this path stored here */
   atomic_ulong latency_ns_sum;
   atomic_ulong latency_bucket[SRV_BUCKETS + 1];
+  atomic_uint queued; /* its requests waiting for a worker (the pool's) */
 } ep_metrics;
 
 struct srv_metrics {
@@ -121,11 +122,17 @@ void srv_metrics_batch_item(srv_metrics *m, size_t ep, int status) {
   atomic_fetch_add(&m->ep[ep].batch_status[status - 100], 1);
 }
 
-void srv_metrics_pool(srv_metrics *m, const srv_pool_load_t *load) {
-  atomic_store(&m->workers, load->workers);
-  atomic_store(&m->busy, load->running);
-  atomic_store(&m->waiting, load->waiting);
-  atomic_store(&m->clients, load->clients);
+void srv_metrics_pool(srv_metrics *m, srv_pool *p) {
+  srv_pool_load_t load;
+  unsigned *by = calloc(m->n, sizeof *by);
+  srv_pool_load(p, &load, by, by ? m->n : 0);
+  atomic_store(&m->workers, load.workers);
+  atomic_store(&m->busy, load.running);
+  atomic_store(&m->waiting, load.waiting);
+  atomic_store(&m->clients, load.clients);
+  for (size_t e = 0; by && e < m->n; e++)
+    atomic_store(&m->ep[e].queued, by[e]);
+  free(by);
 }
 
 void srv_metrics_job_chunk(srv_metrics *m, size_t ep, long items) {
@@ -326,6 +333,23 @@ static void process(sbuf *s, const srv_metrics *m) {
       m->start_time);
 }
 
+/* The requests waiting for a worker by endpoint, one series for each that
+ * can wait (those that compute, and the job resources), 0 included: the
+ * pool serves its clients round robin whatever they ask, and this says
+ * which work a queue holds, cheap or long.  A /batch counts its body's parse
+ * and then each of its runners that waits (a runner takes the batch's next
+ * items, one after another). */
+static void queued(sbuf *s, const srv_metrics *m) {
+  put(s, "# HELP stickslip_queued_requests Requests waiting for a worker, by "
+         "endpoint (a /batch: its parse, then each runner of its items).\n"
+         "# TYPE stickslip_queued_requests gauge\n");
+  for (size_t e = 0; e < m->n; e++)
+    if (e + 1 == m->n ||
+        (e + 2 < m->n && api_endpoint_at(e)->run_class != API_RUN_INLINE))
+      put(s, "stickslip_queued_requests{endpoint=\"%s\"} %u\n", label(m, e),
+          atomic_load(&m->ep[e].queued));
+}
+
 char *srv_metrics_render(srv_metrics *m) {
   sbuf s = {malloc(8192), 0, 8192};
   put(&s,
@@ -390,6 +414,7 @@ char *srv_metrics_render(srv_metrics *m) {
       "# TYPE stickslip_queued_clients gauge\nstickslip_queued_clients %u\n",
       atomic_load(&m->workers), atomic_load(&m->busy), atomic_load(&m->waiting),
       atomic_load(&m->clients));
+  queued(&s, m);
   put(&s,
       "# HELP stickslip_rejected_busy_total Requests answered 503 "
       "because their client's queue was full.\n"

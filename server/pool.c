@@ -37,6 +37,7 @@ struct srv_pool {
   client *first, *last;
   srv_job *all; /* every job waiting or running (for srv_pool_watch) */
   unsigned running, waiting;
+  unsigned *waiting_kind; /* waiting, by srv_job.kind (cfg.kinds of them) */
   srv_pool_cfg cfg;
   int stop;
   pthread_t *threads;
@@ -104,6 +105,7 @@ static void dequeue(srv_pool *p, srv_job *j) {
   j->next = NULL;
   c->waiting--;
   p->waiting--;
+  p->waiting_kind[j->kind]--;
 }
 
 /* The next job to run: the first client, in serving order, with a job
@@ -169,11 +171,14 @@ srv_pool *srv_pool_new(const srv_pool_cfg *cfg) {
   p->cfg = *cfg;
   if (p->cfg.client_workers == 0)
     p->cfg.client_workers = 1;
+  if (p->cfg.kinds == 0)
+    p->cfg.kinds = 1;
   pthread_mutex_init(&p->mu, NULL);
   pthread_cond_init(&p->work, NULL);
   pthread_cond_init(&p->idle, NULL);
   p->threads = calloc(cfg->workers, sizeof *p->threads);
-  if (!p->threads) {
+  p->waiting_kind = calloc(p->cfg.kinds, sizeof *p->waiting_kind);
+  if (!p->threads || !p->waiting_kind) {
     srv_pool_free(p);
     return NULL;
   }
@@ -217,6 +222,9 @@ int srv_pool_submit(srv_pool *p, srv_job *j, const char *key) {
     c->tail = j;
     c->waiting++;
     p->waiting++;
+    if (j->kind >= p->cfg.kinds)
+      j->kind = p->cfg.kinds - 1;
+    p->waiting_kind[j->kind]++;
     j->all_prev = NULL;
     j->all_next = p->all;
     if (p->all)
@@ -284,11 +292,14 @@ void srv_pool_watch(srv_pool *p) {
   drop_waiting(p, 0, SRV_JOB_CANCELLED);
 }
 
-void srv_pool_load(srv_pool *p, srv_pool_load_t *out) {
+void srv_pool_load(srv_pool *p, srv_pool_load_t *out, unsigned *waiting_by,
+                   size_t n) {
   unsigned clients = 0;
   pthread_mutex_lock(&p->mu);
   for (client *c = p->first; c; c = c->next)
     clients++;
+  for (size_t k = 0; waiting_by && k < n; k++)
+    waiting_by[k] = k < p->cfg.kinds ? p->waiting_kind[k] : 0;
   out->workers = p->n_threads;
   out->running = p->running;
   out->waiting = p->waiting;
@@ -340,6 +351,7 @@ void srv_pool_free(srv_pool *p) {
   for (unsigned i = 0; i < p->n_threads; i++)
     pthread_join(p->threads[i], NULL);
   free(p->threads);
+  free(p->waiting_kind);
   pthread_cond_destroy(&p->work);
   pthread_cond_destroy(&p->idle);
   pthread_mutex_destroy(&p->mu);

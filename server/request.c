@@ -507,6 +507,7 @@ static const srv_job_ops REQUEST_JOB = {job_queued, job_run, job_done,
 enum MHD_Result srv__submit(struct srv_daemon *d, struct MHD_Connection *c,
                             srv__req *r) {
   r->job.ops = &REQUEST_JOB;
+  r->job.kind = (unsigned)r->ep; /* the row of its endpoint in the metrics */
   int rc = srv_pool_submit(d->pool, &r->job, r->key);
   if (rc == 0)
     return MHD_YES; /* suspended by job_queued; resumed by job_done */
@@ -718,17 +719,30 @@ static void access_log(const struct srv_daemon *d, const srv__req *r,
 /* libmicrohttpd's NOTIFY_COMPLETED: the request is answered, or its client
  * gone: before its answer was queued, or while it was being sent (a stream
  * cut, a batch's included); both are 499, as nginx logs them. */
+/* The status of an answer libmicrohttpd made itself, for a request the
+ * daemon had not answered yet: its error pages for what it refuses while a
+ * body comes (a malformed chunk, a chunk size over 2^64, and, in 0.9.75, a
+ * chunk line that does not fit the connection's memory, answered 500;
+ * docs/howto/limits.md).  @a otherwise when it made none: the client went
+ * away. */
+static int library_status(struct MHD_Connection *c, int otherwise) {
+  const union MHD_ConnectionInfo *ci =
+      MHD_get_connection_info(c, MHD_CONNECTION_INFO_HTTP_STATUS);
+  return ci ? (int)ci->http_status : otherwise;
+}
+
 void srv__completed(void *cls, struct MHD_Connection *c, void **con_cls,
                     enum MHD_RequestTerminationCode toe) {
   struct srv_daemon *d = cls;
   srv__req *r = *con_cls;
-  (void)c;
   if (!r)
     return;
   double dt = srv__now() - r->t0;
   int cut = !r->raw && toe != MHD_REQUEST_TERMINATED_COMPLETED_OK &&
             toe != MHD_REQUEST_TERMINATED_DAEMON_SHUTDOWN;
   int status = r->done && !cut ? r->status : 499;
+  if (!r->done && toe == MHD_REQUEST_TERMINATED_WITH_ERROR)
+    status = library_status(c, status);
   srv_metrics_observe(d->metrics, r->ep, status, dt);
   srv_metrics_in_flight(d->metrics, -1);
   if (r->batch)

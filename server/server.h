@@ -91,12 +91,16 @@ struct srv_job {
   void *owner;                         /* its client */
   struct srv_pool *pool;               /* the pool it was submitted to */
   unsigned extra; /* workers borrowed for its own threads (srv_pool_borrow) */
+  unsigned kind;  /* what it is counted as while it waits (srv_pool_cfg.kinds):
+                     set by the caller before srv_pool_submit */
 };
 
 typedef struct srv_pool_cfg {
   unsigned workers;        /* threads */
   unsigned client_workers; /* jobs of one client running at once */
   unsigned client_queue;   /* jobs of one client waiting */
+  unsigned kinds; /* the kinds of job counted apart while they wait (the
+                     last counts every job of a kind beyond); 0: 1 */
 } srv_pool_cfg;
 
 typedef struct srv_pool srv_pool;
@@ -123,7 +127,10 @@ typedef struct srv_pool_load_t {
   unsigned waiting; /* jobs queued (requests and batch items) */
   unsigned clients; /* clients with a job waiting or running */
 } srv_pool_load_t;
-void srv_pool_load(srv_pool *p, srv_pool_load_t *out);
+/* @a waiting_by: NULL, or room for @a n counts, filled with the jobs waiting
+ * of each kind (0 beyond the pool's kinds). */
+void srv_pool_load(srv_pool *p, srv_pool_load_t *out, unsigned *waiting_by,
+                   size_t n);
 /* Whether a worker is free and no job waits: work done elsewhere now (on
  * the I/O thread) then takes no turn from a job queued. */
 int srv_pool_idle(srv_pool *p);
@@ -167,7 +174,7 @@ long srv_metrics_in_flight(srv_metrics *m, int delta);
 /* An item of a batch answered @a status; @a ep as for srv_metrics_observe. */
 void srv_metrics_batch_item(srv_metrics *m, size_t ep, int status);
 /* The pool's load, for the next srv_metrics_render. */
-void srv_metrics_pool(srv_metrics *m, const srv_pool_load_t *load);
+void srv_metrics_pool(srv_metrics *m, srv_pool *p);
 /* A chunk of a job of endpoint @a ep (as for srv_metrics_observe), of
  * @a items items, computed and stored by this replica. */
 void srv_metrics_job_chunk(srv_metrics *m, size_t ep, long items);
