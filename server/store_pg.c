@@ -6,12 +6,12 @@
  * marks its job running and leases it in one statement (one round trip,
  * where a transaction of a statement each took five), so two replicas
  * claiming at once take different chunks, and neither waits for the
- * other.  Counters of a
- * job (chunks done) are updated in place, so concurrent completions of one
- * job's chunks add up.  One connection per store, used under a mutex; a
- * connection that broke is reset once at the next call.  The tables are
- * named stickslip_* (the database may hold others), created on open under
- * an advisory lock, so replicas starting together do not race.
+ * other.  Counters of a job (chunks done) are updated in place, so
+ * concurrent completions of one job's chunks add up.  One connection per
+ * store, used under a mutex; a connection that broke is reset once at the
+ * next call.  The tables are named stickslip_* (the database may hold
+ * others), created on open under an advisory lock, so replicas starting
+ * together do not race.
  */
 #include <arpa/inet.h>
 #include <libpq-fe.h>
