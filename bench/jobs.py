@@ -7,7 +7,9 @@
    Prefer: respond-async, polled until successful and its results read.
    The store's overhead is the job's wall time over the synchronous one;
    the two answers are compared cell by cell (the "seconds" of the done
-   line aside).
+   line aside).  With --repeat N the two run N times each, in turn (the
+   machine may be shared: a load that comes and goes falls on both), and
+   the medians are reported, wall time and the daemon's CPU time.
 2. A sweep of ITEMS /orbit requests (each from a guess: the overshoot orbit
    continued along ur) as one /batch job: the wall time from the POST to
    the last line read, and items per second.
@@ -19,7 +21,8 @@ cutting and storing; two replicas compute a job's chunks on two threads.
 The machine has 2 cores, so two replicas can at most double that.
 
 Usage: bench/jobs.py STICKSLIPD [results_dir] [--cells N] [--items N]
-                     [--store URI]   (writes jobs.md in results_dir)
+                     [--repeat N] [--store URI]   (writes jobs.md in
+                     results_dir)
 """
 import argparse
 import http.client
@@ -85,6 +88,19 @@ def run_job(port, path, body, poll=0.05):
     return time.perf_counter() - t0, res
 
 
+def cpu_seconds(proc):
+    """The CPU time (user and system) the daemon has used so far."""
+    with open("/proc/%d/stat" % proc.pid) as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def median(v):
+    v = sorted(v)
+    return v[len(v) // 2] if len(v) % 2 else (v[len(v) // 2 - 1] +
+                                               v[len(v) // 2]) / 2
+
+
 def strip_seconds(lines):
     out = []
     for ln in lines:
@@ -118,6 +134,7 @@ def main():
     ap.add_argument("results", nargs="?")
     ap.add_argument("--cells", type=int, default=200)
     ap.add_argument("--items", type=int, default=100000)
+    ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--store")
     a = ap.parse_args()
     rows = []
@@ -129,24 +146,34 @@ def main():
             port = procs[0][1]
             try:
                 body = map_body(a.cells)
-                sync_s = None
-                if replicas == 1:
-                    t0 = time.perf_counter()
-                    st, _, sync = request(port, "POST", "/map", body)
-                    sync_s = time.perf_counter() - t0
-                    if st != 200:
-                        sys.exit("sync map: %d %s" % (st, sync[:300]))
-                    sync_lines = strip_seconds(sync.decode().splitlines())
-                job_s, res = run_job(port, "/map", body)
-                same = strip_seconds(res.decode().splitlines()) == sync_lines
+                proc = procs[0][0]
+                sync_s, sync_c, job_s, job_c, same = [], [], [], [], True
+                for _ in range(a.repeat if replicas == 1 else 1):
+                    if replicas == 1:
+                        c0, t0 = cpu_seconds(proc), time.perf_counter()
+                        st, _, sync = request(port, "POST", "/map", body)
+                        sync_s.append(time.perf_counter() - t0)
+                        sync_c.append(cpu_seconds(proc) - c0)
+                        if st != 200:
+                            sys.exit("sync map: %d %s" % (st, sync[:300]))
+                        sync_lines = strip_seconds(sync.decode().splitlines())
+                    c0 = cpu_seconds(proc)
+                    s, res = run_job(port, "/map", body)
+                    job_s.append(s)
+                    job_c.append(cpu_seconds(proc) - c0)
+                    same = same and strip_seconds(
+                        res.decode().splitlines()) == sync_lines
                 rows.append(("%dx%d /map" % (a.cells, a.cells), replicas,
-                             sync_s, job_s, same))
+                             median(sync_s) if sync_s else None,
+                             median(job_s), same,
+                             (median(sync_c), median(job_c))
+                             if replicas == 1 else None))
                 body = sweep_body(a.items)
                 job_s, res = run_job(port, "/batch", body)
                 lines = res.decode().splitlines()
                 ok = json.loads(lines[-1]).get("ok")
                 rows.append(("%d /orbit items (guess)" % a.items, replicas,
-                             None, job_s, ok == a.items))
+                             None, job_s, ok == a.items, None))
             finally:
                 for p, _ in procs:
                     p.terminate()
@@ -155,7 +182,11 @@ def main():
         shutil.rmtree(tmp, ignore_errors=True)
     out = ["| work | replicas | synchronous (s) | job (s) | job / sync, or "
            "rate | answer |", "| --- | ---: | ---: | ---: | ---: | --- |"]
-    for work, rep, s, j, same in rows:
+    cpu = []
+    for work, rep, s, j, same, c in rows:
+        if c:
+            cpu.append("%s: the daemon's CPU %.2f s synchronously, %.2f s as "
+                       "a job (%.3f)" % (work, c[0], c[1], c[1] / c[0]))
         ratio = "%.3f" % (j / s) if s else ""
         if "items" in work:
             ratio = "%.0f items/s" % (a.items / j)
@@ -163,6 +194,9 @@ def main():
             work, rep, "%.2f" % s if s else "", j, ratio,
             "same" if same else "DIFFERS"))
     text = "\n".join(out) + "\n"
+    if a.repeat > 1:
+        text += "\nMedians of %d runs each, in turn.\n" % a.repeat
+    text += "".join("\n" + c + "\n" for c in cpu)
     print(text)
     if a.results:
         with open(os.path.join(a.results, "jobs.md"), "w") as f:
