@@ -108,15 +108,11 @@ static void check_cell(const ss_params *base, const ss_map *map, int c,
                        const ss_orbit_opts *oo, tally *t) {
   ss_model m;
   ss_orbit out[MAXO];
-  int n = 0, n1 = map->axes[1].n, i = c / n1, j = c % n1;
+  int lacking = 0, n1 = map->axes[1].n, i = c / n1, j = c % n1;
   const ss_map_cell *ce = &map->cells[c];
-  model_at(base, map, c, &m);
-  ASSERT_EQ_INT(ss_orbit_find(&m, oo, out, MAXO, &n, NULL, NULL), SS_OK);
-  t->orbits += n;
-  for (int k = 0; k < n; k++) {
+  t->orbits += search_cell(base, NULL, map, c, oo, &m, out, MAXO, &lacking);
+  for (int k = 0; k < lacking; k++) {
     const ss_orbit *o = &out[k];
-    if (holds(ce, o->n_phases, o->modes, o->durations, o->period))
-      continue;
     int island =
         !reaches_map(base, map, c, o->n_phases, o->modes, o->durations);
     t->islands += island;
