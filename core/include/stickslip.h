@@ -1328,13 +1328,17 @@ typedef struct ss_map_opts {
   /** The full search runs on a lattice of cells spread evenly along each
    *  axis from the first to the last, at most search_every apart, at every
    *  cell into which a neighbour's orbit does not continue (or continues
-   *  far from itself) and which holds no orbit near it, and, when
-   *  search_every is 1, everywhere (see no_edge_search).  0: 8. */
+   *  far from itself) and which holds no orbit near it, at the two cells
+   *  between which a family the map holds passes a multiplier through +1,
+   *  -1 or the unit circle, and, when search_every is 1, everywhere (the
+   *  map then holds in every cell every orbit its search finds; see
+   *  no_edge_search).  0: 8. */
   int search_every;
   int max_orbits; /**< per cell (0: 16) */
   int threads;    /**< the full searches run on this many threads (0: 1) */
-  /** 1: no full search where a family ends (the lattice and the spreading
-   *  only): faster, and blind to a family that begins only there */
+  /** 1: no full search where a family ends or bifurcates (the lattice and
+   *  the spreading only): faster, and blind to a family that begins only
+   *  there */
   int no_edge_search;
   /** Non-NULL: the axes are physical parameters (ss_phys_id) of *physical,
    *  whose dimensionless parameters each cell takes (times stay

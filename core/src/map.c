@@ -24,6 +24,18 @@
  * orbits separate searches find; this one misses 3, each of a family that
  * lives in 1 or 2 cells only).
  *
+ * Where a family a cell holds bifurcates between it and a neighbour, the
+ * full search runs at both, when neither the lattice nor an end has
+ * searched them: a family of one or two cells (an island) is born at a
+ * fold, a period doubling or a torus of another, so a multiplier of the
+ * family it is born from passes +1, -1 or the unit circle there (the map's
+ * own orbits tell where: test functions of their multipliers, as
+ * continuation locates special points, change sign between two cells).  On
+ * the 30x30 map above this finds the 3 islands (795 full searches; every
+ * cell's search: 900); an island where no family the map holds bifurcates
+ * (a region without orbits of the map's kinds) is found only by a search
+ * at its cell (search_every 1).
+ *
  * Each neighbour's orbits are tried once per cell (a cell remembers how
  * many of each neighbour's orbits it has tried; orbits are only ever
  * appended), the one continued from the cell itself too (it was skipped):
@@ -60,7 +72,7 @@
 /* A cell while the map is made. */
 typedef struct work {
   int tried[8]; /* of each neighbour's orbits, how many were tried */
-  unsigned char queued, searched, ended;
+  unsigned char queued, searched, ended, bifurcates;
 } work;
 
 /* A neighbour's orbit that did not continue into a cell: orbit t of cell
@@ -508,6 +520,67 @@ static void mark_ends(mapper *mp) {
   mp->n_failed = 0;
 }
 
+/* The test functions of an orbit's multipliers l1, l2 whose zeros are a
+ * fold (l = +1: det(J - I)), a period doubling (l = -1: det(J + I)) and a
+ * torus (|l| = 1 for a complex pair: det J - 1); each is a product over
+ * the two multipliers, so it is real and continuous whether they are real
+ * or a complex pair. */
+static void bifurcation_tests(const ss_map_orbit *a, double f[3]) {
+  double r0 = a->eig_re[0], r1 = a->eig_re[1], im = a->eig_im[0];
+  if (im != 0) {
+    f[0] = (1 - r0) * (1 - r0) + im * im;
+    f[1] = (1 + r0) * (1 + r0) + im * im;
+    f[2] = r0 * r0 + im * im - 1;
+  } else {
+    f[0] = (1 - r0) * (1 - r1);
+    f[1] = (1 + r0) * (1 + r1);
+    f[2] = r0 * r1 - 1;
+  }
+}
+
+/* Whether a family of cell @a c bifurcates between it and cell @a nb: an
+ * orbit of c and one near it of nb (the same family, a cell's step away)
+ * whose test functions differ in sign. */
+static int bifurcates(const ss_map *map, int c, int nb) {
+  const ss_map_cell *a = &map->cells[c], *b = &map->cells[nb];
+  for (int i = 0; i < a->n_orbits; i++) {
+    double fa[3];
+    bifurcation_tests(&a->orbits[i], fa);
+    for (int j = 0; j < b->n_orbits; j++) {
+      const ss_map_orbit *q = &b->orbits[j];
+      if (distance(q->n_phases, q->modes, q->durations, &a->orbits[i]) >=
+          MAP_NEAR)
+        continue;
+      double fb[3];
+      bifurcation_tests(q, fb);
+      for (int t = 0; t < 3; t++)
+        if ((fa[t] < 0) != (fb[t] < 0))
+          return 1;
+    }
+  }
+  return 0;
+}
+
+/* Mark the cells between which a family bifurcates (both sides: each is
+ * judged with each of its neighbours). */
+static void mark_bifurcations(mapper *mp) {
+  for (int c = 0; c < mp->map->n_cells; c++)
+    for (int k = 0; k < 8 && !mp->w[c].searched && !mp->w[c].bifurcates; k++) {
+      int nb = neighbour(mp->map, c, k);
+      mp->w[c].bifurcates = nb >= 0 && bifurcates(mp->map, c, nb);
+    }
+}
+
+/* The cells marked for the full search and not searched yet, into @a
+ * todo; how many. */
+static int marked(const mapper *mp, int *todo) {
+  int n = 0;
+  for (int c = 0; c < mp->map->n_cells; c++)
+    if ((mp->w[c].ended || mp->w[c].bifurcates) && !mp->w[c].searched)
+      todo[n++] = c;
+  return n;
+}
+
 /* Visit the cells on the work list until it is empty. */
 static int spread(mapper *mp, ss_diag *d) {
   while (mp->count > 0 && !over_budget(mp)) {
@@ -696,14 +769,15 @@ int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
   }
   n_todo = lattice(&mp, todo);
   rc = search_cells(&mp, todo, n_todo, d);
-  /* spread; search where families end; spread what that finds */
+  /* spread; search where families end, or else where they bifurcate;
+   * spread what that finds */
   while (rc == SS_OK && (rc = spread(&mp, d)) == SS_OK &&
          !opts->no_edge_search) {
     mark_ends(&mp);
-    n_todo = 0;
-    for (int c = 0; c < map->n_cells; c++)
-      if (mp.w[c].ended && !mp.w[c].searched)
-        todo[n_todo++] = c;
+    if ((n_todo = marked(&mp, todo)) == 0) {
+      mark_bifurcations(&mp);
+      n_todo = marked(&mp, todo);
+    }
     if (n_todo == 0)
       break;
     rc = search_cells(&mp, todo, n_todo, d);

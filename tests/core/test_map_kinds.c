@@ -21,14 +21,21 @@
  *  - every orbit the separate search finds is in the cell, unless it is an
  *    island: solved from its durations at each of the eight neighbours, it
  *    gives no orbit that the neighbour's cell holds (no family the map has
- *    reaches it; only a search at the cell itself finds it).  Islands are
- *    listed, and are at most 1 % of the orbits of the battery.
+ *    reaches it; only a search at the cell itself finds it), and no family
+ *    the map holds bifurcates between the cell and a neighbour (a
+ *    multiplier through +1, -1 or the unit circle: the map searches there).
+ *    Islands are listed, and are at most 1 % of the orbits of the battery;
+ *    the first map with one is made again with search_every 1 (every cell
+ *    searched), which must hold every orbit of every cell (a small map of
+ *    the reproducer's plane when no map has one).
  * And the reproducer of a hole: the 30 x 30 stick-slip map in chi and eta
  * at us 0.1, ur 0.6; its cell chi 0.1724137931034483, eta 0.5 holds the
  * stable orbit of durations [18.05922, 6.75598], which the neighbour's
  * orbit, solved there, gives (the orbit the cell had continued into that
  * neighbour, where it jumped to another family: solved back, it is not the
- * one the cell had).
+ * one the cell had); and its cells (14, 2), (17, 3), (18, 4) hold the
+ * islands that families passing a multiplier through -1 or the unit
+ * circle beside them give birth to.
  * Usage: test_map_kinds [n]
  */
 #include <math.h>
@@ -55,6 +62,7 @@ static double draw(double a, double b) {
 
 typedef struct tally {
   int orbits, missing, islands, holes;
+  int every_cell; /* maps made again with search_every 1 */
 } tally;
 
 /* The cell of @a map at (i, j), or -1 outside. */
@@ -103,22 +111,35 @@ static int reaches_map(const ss_params *base, const ss_map *map, int c, int n,
   return 0;
 }
 
+/* Does a family of cell c of @a map bifurcate between c and a neighbour? */
+static int bifurcates_near(const ss_map *map, int c) {
+  int n1 = map->axes[1].n, i = c / n1, j = c % n1;
+  for (int di = -1; di <= 1; di++)
+    for (int dj = -1; dj <= 1; dj++) {
+      int b = cell_at(map, i + di, j + dj);
+      if ((di || dj) && b >= 0 &&
+          (bifurcates(&map->cells[c], &map->cells[b]) ||
+           bifurcates(&map->cells[b], &map->cells[c])))
+        return 1;
+    }
+  return 0;
+}
+
 /* The cell c of @a map against the separate search with @a oo. */
 static void check_cell(const ss_params *base, const ss_map *map, int c,
                        const ss_orbit_opts *oo, tally *t) {
   ss_model m;
   ss_orbit out[MAXO];
-  int n = 0, n1 = map->axes[1].n, i = c / n1, j = c % n1;
+  int lacking = 0, n1 = map->axes[1].n, i = c / n1, j = c % n1;
   const ss_map_cell *ce = &map->cells[c];
-  model_at(base, map, c, &m);
-  ASSERT_EQ_INT(ss_orbit_find(&m, oo, out, MAXO, &n, NULL, NULL), SS_OK);
-  t->orbits += n;
-  for (int k = 0; k < n; k++) {
+  t->orbits += search_cell(base, NULL, map, c, oo, &m, out, MAXO, &lacking);
+  for (int k = 0; k < lacking; k++) {
     const ss_orbit *o = &out[k];
-    if (holds(ce, o->n_phases, o->modes, o->durations, o->period))
-      continue;
+    /* an island where a family of the map bifurcates is missing: the map
+     * searches there */
     int island =
-        !reaches_map(base, map, c, o->n_phases, o->modes, o->durations);
+        !reaches_map(base, map, c, o->n_phases, o->modes, o->durations) &&
+        !bifurcates_near(map, c);
     t->islands += island;
     t->missing += !island;
     printf("  %s: cell (%d, %d) lacks the %s orbit of period %.6f, "
@@ -145,6 +166,37 @@ static void check_cell(const ss_params *base, const ss_map *map, int c,
         }
       }
     }
+}
+
+/* EVIDENCE: README "Maps" — with search_every 1 the full search runs at
+ * every cell, so the map holds every orbit the separate search finds: the
+ * map of @a ax around @a base again so, every cell complete, nothing
+ * missing and no island. */
+static void check_every_cell(const ss_params *base, const ss_map_axis *ax,
+                             unsigned kinds, tally *all) {
+  ss_map_opts mo;
+  memset(&mo, 0, sizeof mo);
+  mo.kinds = kinds;
+  mo.search_every = 1;
+  ss_map map;
+  ss_diag d;
+  ASSERT_EQ_INT(ss_map_run(base, 2, ax, &mo, &map, &d), SS_OK);
+  ss_orbit_opts oo;
+  memset(&oo, 0, sizeof oo);
+  oo.kinds = kinds;
+  tally t = {0, 0, 0, 0, 0};
+  int complete = 0;
+  for (int c = 0; c < map.n_cells; c++) {
+    complete += map.cells[c].complete;
+    check_cell(base, &map, c, &oo, &t);
+  }
+  printf("  search_every 1: %d searches, %d complete cells; %d orbits: %d "
+         "missing, %d islands, %d holes\n",
+         map.searches, complete, t.orbits, t.missing, t.islands, t.holes);
+  ASSERT_EQ_INT(complete, map.n_cells);
+  ASSERT_EQ_INT(t.missing + t.islands + t.holes, 0);
+  all->every_cell++;
+  ss_map_free(&map);
 }
 
 typedef struct plane {
@@ -186,7 +238,7 @@ static void check_map(const char *kind, unsigned kinds, const plane *pl, int N,
   ss_orbit_opts oo;
   memset(&oo, 0, sizeof oo);
   oo.kinds = kinds; /* the map's max_period (4) and effort (2) by default */
-  tally t = {0, 0, 0, 0};
+  tally t = {0, 0, 0, 0, 0};
   printf("%-10s %-6s chi %.4f eta %.4f us %.4f ur %.4f: %d searches, %d "
          "solves\n",
          kind, pl->name, base.chi, base.eta, base.us, base.ur, map.searches,
@@ -201,6 +253,8 @@ static void check_map(const char *kind, unsigned kinds, const plane *pl, int N,
   all->orbits += t.orbits;
   all->islands += t.islands;
   ss_map_free(&map);
+  if (t.islands > 0 && all->every_cell == 0)
+    check_every_cell(&base, ax, kinds, all);
 }
 
 /* The reproducer: the stable orbit [18.05922, 6.75598] at cell (3, 0). */
@@ -227,12 +281,16 @@ static void check_reproducer(void) {
          "the stable [18.05922, 6.75598] %s\n",
          map.searches, map.solves, ce->n_orbits, found ? "among them" : "NOT");
   ASSERT_EQ_INT(found, 1);
-  /* and all the separate search finds there */
+  /* and all the separate search finds there, and at the three cells of
+   * islands (families of 1-2 cells, born where a family of the map passes
+   * a multiplier through +1, -1 or the unit circle) */
+  static const int CELLS[4][2] = {{3, 0}, {14, 2}, {17, 3}, {18, 4}};
   ss_orbit_opts oo;
   memset(&oo, 0, sizeof oo);
   oo.kinds = SS_ORBIT_STICKSLIP;
-  tally t = {0, 0, 0, 0};
-  check_cell(&base, &map, c, &oo, &t);
+  tally t = {0, 0, 0, 0, 0};
+  for (int k = 0; k < 4; k++)
+    check_cell(&base, &map, cell_at(&map, CELLS[k][0], CELLS[k][1]), &oo, &t);
   ASSERT_EQ_INT(t.missing + t.islands, 0);
   ASSERT_EQ_INT(t.holes, 0);
   ss_map_free(&map);
@@ -256,14 +314,22 @@ int main(int argc, char **argv) {
                {"overshoot", SS_ORBIT_OVERSHOOT},
                {"other", SS_ORBIT_OTHER},
                {"all", SS_ORBIT_ALL}};
-  tally all = {0, 0, 0, 0};
+  tally all = {0, 0, 0, 0, 0};
   check_reproducer();
   for (int k = 0; k < 4; k++)
     for (int r = 0; r < 2; r++)
       check_map(KINDS[k].name, KINDS[k].kinds, &PLANES[(k + 2 * r) % 4], N,
                 &all);
-  printf("battery: %d orbits, %d islands\n", all.orbits, all.islands);
+  printf("battery: %d orbits, %d islands; %d maps again with search_every "
+         "1\n",
+         all.orbits, all.islands, all.every_cell);
   ASSERT_TRUE(all.orbits > 0);
+  if (all.every_cell == 0) { /* no island: search_every 1 on a small map */
+    ss_params base = {0.3, 2, 0.1, 0.6, 1};
+    ss_map_axis ax[2] = {{SS_PARAM_CHI, 0.1, 0.8, 8},
+                         {SS_PARAM_ETA, 0.5, 8, 8}};
+    check_every_cell(&base, ax, SS_ORBIT_STICKSLIP, &all);
+  }
   ASSERT_TRUE(100 * all.islands <= all.orbits);
   TEST_DONE();
 }
