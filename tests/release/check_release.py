@@ -105,6 +105,7 @@ OTHER_TOOLS = {
     "docker": ["--build-arg", "--rm", "--scale"],
     "scripts/setup.sh": ["--test"],
     "scripts/examples.py": ["--check", "--write"],
+    "bench/jobs.py": ["--repeat"],
     "jupyter nbconvert": ["--execute"],
     "python -m stickslip": ["--chi"],
     "curl": ["--parallel-max"],
