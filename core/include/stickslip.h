@@ -750,9 +750,14 @@ typedef struct ss_orbit_report {
   /** The scan of the slip-stick and slip-overshoot-stick duration equations:
    *  every root with each duration in (0, scan_box] on a grid of step
    *  scan_step (both 0 when there was no scan: from a guess, or neither
-   *  family asked for).  Orbits of those families outside the box, and of
-   *  other sequences, come only from simulation and Newton starts. */
+   *  family asked for).  The box is 1.5 slow modal periods, grown where the
+   *  motion from the starts of slips that may outlast it travels longer
+   *  phases (to 1.1 times the longest), at most scan_box_cap (3 slow modal
+   *  periods); the proof (cert) covers the same durations.  Orbits of those
+   *  families outside the box, and of other sequences, come only from
+   *  simulation and Newton starts. */
   double scan_box, scan_step;
+  double scan_box_cap; /**< the most scan_box grows to (0: no search) */
   /** The scan's work: cells examined, at every refinement of the grid. */
   long scan_cells;
   char reason[256]; /**< why nothing was found, or the closest rejection */

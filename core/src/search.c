@@ -33,6 +33,14 @@
 #define KNOWN_MAX 64     /* returns of stable orbits a simulation looks for */
 #define MAP_NEWTON_ITERS 30
 #define SS_SCAN_PERIODS 1.5 /* the box of the scan, in slow modal periods */
+/* the most it grows to, in slow modal periods (see grow_box) */
+#define SS_SCAN_MAX_PERIODS 3.0
+/* a grown box's room beyond an orbit's longest phase */
+#define BOX_MARGIN 1.1
+/* the step of the bound on the starts of long slips, in radians of the fast
+ * mode, and the room of its polygon's vertices */
+#define LONG_SLIP_STEP 0.1
+#define LONG_SLIP_VERTICES 512
 #define SCAN_MAX_ROOTS 256
 #define MAX_SEEDS 42 /* the finest grid of seeds, 7 x 6 */
 
@@ -46,6 +54,7 @@ typedef struct collect {
   int (*cancelled)(void *);
   void *cancel_cls;
   int stopped; /* SS_ELIMIT_TIME or SS_ECANCELED once the search must stop */
+  double box;  /* the box of the scan and of the proof (family_box, grown) */
   /* the returns to Sigma0 (x1, x1') of the stable orbits found, for
    * simulations to stop when they reach one; made for the first n_seen of
    * out */
@@ -553,6 +562,115 @@ static void from_simulation(collect *c, const double seed[2], int max_k) {
   }
 }
 
+/* The box that the dynamics ask for: a periodic motion's phases can last
+ * longer than family_box (a slip of a two-mode motion whose velocity only
+ * just reaches V lasts arbitrarily long), and where they do, the box grows
+ * to cover them.
+ *
+ * Where to look: a slip from s = (z1, z1') on Sigma0 is affine in s, so its
+ * velocity less V is g(t; s) = a1(t) z1 + a2(t) z1' + b(t), and the starts
+ * whose slip outlasts T are those with g(t; s) <= 0 for every t in (0, T]:
+ * an intersection of half-planes, a convex set.  Clipping the proof's
+ * start box (CERT_STATE_BOX) by the half-planes at t = h, 2h, ..., T (h a
+ * tenth of a radian of the fast mode) leaves a convex polygon that holds
+ * that set (the constraints between the samples are dropped, so it can only
+ * be larger); when it is empty, no slip from a start in the box outlasts T.
+ * When it is not, the motion from its centre (the mean of its vertices) is
+ * simulated like any seed, before the others (so that no orbit found before
+ * stops it): an orbit refined from it is returned, and if one has a phase
+ * longer than the box, the box grows to BOX_MARGIN times the longest, at
+ * most SS_SCAN_MAX_PERIODS slow modal periods.  The phases of a motion that
+ * does not settle are not enough: from such starts it wanders among slips
+ * near perpetual (up to 20 boxes long over the search battery), and a box
+ * grown to them costs four times the scan for no orbit.  The rule depends
+ * on the parameters and max_period alone, not on the effort, so every
+ * effort scans and proves the same box. */
+
+/* The slip's g(t; s) = a[0] z1 + a[1] z1' + a[2] on Sigma0 (z2 - z1 =
+ * (ur - us) / chi, z2' = V): z = phi q, each q_j a sinusoid of w_j. */
+static void slip_velocity_row(const ss_model *m, double t, double a[3]) {
+  const ss_params *p = &m->p;
+  double D = (p->ur - p->us) / p->chi;
+  a[0] = a[1] = 0;
+  a[2] = -p->V;
+  for (int j = 0; j < 2; j++) {
+    double sn = sin(m->w[j] * t), cs = cos(m->w[j] * t), f = m->phi[1][j];
+    double pi0 = m->phiinv[j][0], pi1 = m->phiinv[j][1];
+    /* q_j(0) = pi0 z1 + pi1 (z1 + D), q_j'(0) = pi0 z1' + pi1 V */
+    a[0] += -f * m->w[j] * sn * (pi0 + pi1);
+    a[1] += f * cs * pi0;
+    a[2] += -f * m->w[j] * sn * pi1 * D + f * cs * pi1 * p->V;
+  }
+}
+
+/* Clip the convex polygon v (n vertices, room for LONG_SLIP_VERTICES) to
+ * a[0] x + a[1] y + a[2] <= 0; the vertices left.  A convex polygon gains
+ * at most one vertex; should rounding make it gain more than the room, v is
+ * left as it was, which still holds the clipped set. */
+static int clip_polygon(double v[][2], int n, const double a[3]) {
+  double w[LONG_SLIP_VERTICES][2];
+  int k = 0;
+  for (int i = 0; i < n; i++) {
+    if (k + 2 > LONG_SLIP_VERTICES)
+      return n;
+    const double *p = v[i], *q = v[(i + 1) % n];
+    double fp = a[0] * p[0] + a[1] * p[1] + a[2];
+    double fq = a[0] * q[0] + a[1] * q[1] + a[2];
+    if (fp <= 0) {
+      w[k][0] = p[0];
+      w[k++][1] = p[1];
+    }
+    if ((fp < 0 && fq > 0) || (fp > 0 && fq < 0)) {
+      double r = fp / (fp - fq);
+      w[k][0] = p[0] + r * (q[0] - p[0]);
+      w[k++][1] = p[1] + r * (q[1] - p[1]);
+    }
+  }
+  memcpy(v, w, sizeof w[0] * (size_t)k);
+  return k;
+}
+
+/* Whether a slip from a start in the proof's box may outlast T; if so, the
+ * centre of the polygon that holds those starts, in s. */
+static int long_slip_start(const ss_model *m, double T, double s[2]) {
+  const ss_params *p = &m->p;
+  double L = CERT_STATE_BOX * fmax(p->V, p->ur / p->chi);
+  double v[LONG_SLIP_VERTICES][2] = {{-L, -L}, {L, -L}, {L, L}, {-L, L}};
+  double h = LONG_SLIP_STEP / m->w[1];
+  int n = 4;
+  for (int i = 1; i * h <= T && n > 0; i++) {
+    double a[3];
+    slip_velocity_row(m, i * h, a);
+    n = clip_polygon(v, n, a);
+  }
+  if (n == 0)
+    return 0;
+  s[0] = s[1] = 0;
+  for (int i = 0; i < n; i++) {
+    s[0] += v[i][0] / n;
+    s[1] += v[i][1] / n;
+  }
+  return 1;
+}
+
+/* The box of the scan and the proof, into c->box: family_box, grown where
+ * the motion from the starts of long slips travels longer phases. */
+static void grow_box(collect *c, int max_k) {
+  const ss_model *m = c->m;
+  double s[2], longest = 0;
+  c->box = family_box(m);
+  c->rep->scan_box_cap = SS_SCAN_MAX_PERIODS * SS_TWO_PI / m->w[0];
+  if (!long_slip_start(m, c->box, s))
+    return;
+  int before = c->n;
+  from_simulation(c, s, max_k);
+  for (int i = before; i < c->n; i++)
+    for (int k = 0; k < c->out[i].n_phases; k++)
+      longest = fmax(longest, c->out[i].durations[k]);
+  if (longest > c->box)
+    c->box = fmin(c->rep->scan_box_cap, BOX_MARGIN * longest);
+}
+
 /* The sequence of a guess of n phases: its own modes, or, when they do not
  * start with slip and end with stick, the default sequence of that length
  * (slip-stick, slip-overshoot-stick). */
@@ -697,7 +815,7 @@ static const struct {
  * from the scans of the effort (the report gives the finest step). */
 static int from_scan(collect *c, unsigned kinds, int effort, ss_diag *d) {
   const ss_model *m = c->m;
-  double dmax = family_box(m);
+  double dmax = c->box;
   for (int f = 0; f < 2; f++)
     for (int l = 0; l < EFFORT_SCANS && EFFORT_SCAN[effort - 1][l].step > 0;
          l++) {
@@ -745,7 +863,7 @@ static void from_map_newton(collect *c, double seeds[][2], int ns, int kmax) {
 static void certify_families(collect *c, unsigned kinds,
                              const ss_orbit_opts *opts) {
   ss_orbit_report *rep = c->rep;
-  double dmax = family_box(c->m);
+  double dmax = c->box;
   double secs = opts->certify_seconds > 0 ? opts->certify_seconds : 10;
   int left = !!(kinds & FAMILY_KIND[0]) + !!(kinds & FAMILY_KIND[1]);
   for (int f = 0; f < 2; f++) {
@@ -858,6 +976,7 @@ int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts, ss_orbit *out,
   }
   double seeds[MAX_SEEDS][2];
   int ns, ns_sim = make_seeds(&c, effort, seeds, &ns);
+  grow_box(&c, max_k);
   from_simulations(&c, seeds, ns_sim, max_k);
   if ((rc = from_scan(&c, kinds, effort, d)))
     return rc;
