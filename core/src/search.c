@@ -41,6 +41,11 @@
  * mode, and the room of its polygon's vertices */
 #define LONG_SLIP_STEP 0.1
 #define LONG_SLIP_VERTICES 512
+/* At most this many clipping times: where the fast mode is many times the
+ * slow one (or the parameters are extreme, a box of 1e135 time units), the
+ * times are spread wider; fewer cuts leave a larger polygon, which still
+ * holds every start of a long slip. */
+#define LONG_SLIP_MAX_STEPS 4096
 #define SCAN_MAX_ROOTS 256
 #define MAX_SEEDS 42 /* the finest grid of seeds, 7 x 6 */
 
@@ -636,7 +641,7 @@ static int long_slip_start(const ss_model *m, double T, double s[2]) {
   const ss_params *p = &m->p;
   double L = CERT_STATE_BOX * fmax(p->V, p->ur / p->chi);
   double v[LONG_SLIP_VERTICES][2] = {{-L, -L}, {L, -L}, {L, L}, {-L, L}};
-  double h = LONG_SLIP_STEP / m->w[1];
+  double h = fmax(LONG_SLIP_STEP / m->w[1], T / LONG_SLIP_MAX_STEPS);
   int n = 4;
   for (int i = 1; i * h <= T && n > 0; i++) {
     double a[3];
