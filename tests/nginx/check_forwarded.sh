@@ -15,12 +15,9 @@
 # Usage: check_forwarded.sh STICKSLIPD SOURCE_DIR [--sanitized]
 set -euo pipefail
 bin=$1 src=$2 sanitized=${3:-}
-command -v nginx >/dev/null || command -v /usr/sbin/nginx >/dev/null ||
-  { echo "nginx: not installed, skipped"; exit 77; }
-command -v python3 >/dev/null || { echo "python3: not installed, skipped"; exit 77; }
-command -v openssl >/dev/null || { echo "openssl: not installed, skipped"; exit 77; }
 # shellcheck source=tests/nginx/loopback.sh
 . "$src/tests/nginx/loopback.sh"
+nginx_tools_or_skip
 tmp=$(mktemp -d)
 pid=
 cleanup() {

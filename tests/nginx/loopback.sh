@@ -10,6 +10,14 @@
 # limit_conn lines (a throughput benchmark from one address).
 nginx_bin=$(command -v nginx || echo /usr/sbin/nginx)
 
+# nginx_tools_or_skip: exit 77 (a skipped test) unless nginx, python3 and
+# openssl are installed (scripts/setup.sh --test installs them).
+nginx_tools_or_skip() {
+  [ -x "$nginx_bin" ] || { echo "nginx: not installed, skipped"; exit 77; }
+  command -v python3 >/dev/null || { echo "python3: not installed, skipped"; exit 77; }
+  command -v openssl >/dev/null || { echo "openssl: not installed, skipped"; exit 77; }
+}
+
 free_port() {
   python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'
 }
