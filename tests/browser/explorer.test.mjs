@@ -375,7 +375,7 @@ try {
   await page.click("#map-form button[type=submit]");
   const seen = new Set();
   const tj = Date.now();
-  while (Date.now() - tj < 60000) {
+  while (Date.now() - tj < 180000) {
     const s = await page.evaluate(() => ({ v: document.querySelector("#map-form progress").value,
                                           n: document.querySelectorAll("#map .legend").length }));
     seen.add(s.v);
