@@ -400,6 +400,8 @@ static json_t *search_json(const orbit_x *x) {
     json_t *sc = json_object();
     api__set(sc, "max_duration",
              api__real(api__time_out(&x->ap, rep->scan_box)));
+    api__set(sc, "max_duration_cap",
+             api__real(api__time_out(&x->ap, rep->scan_box_cap)));
     api__set(sc, "step", api__real(api__time_out(&x->ap, rep->scan_step)));
     api__set(se, "scan", sc);
   }
