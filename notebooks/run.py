@@ -7,9 +7,11 @@ Starts STICKSLIPD on a free port, with a job store of its own in a
 temporary directory, then `jupyter nbconvert --execute` (from
 Debian's jupyter-nbconvert) with STICKSLIP_URL set to it and the figures
 written to FIGURES_DIR (default: notebooks/figures, the ones the README
-shows); the executed notebook goes beside the figures.  Exits 77 (skipped)
-when nbconvert or the kernel's packages are missing.
+shows); the executed notebook goes beside the figures.  Fails when a cell
+fails or writes a warning; exits 77 (skipped) when nbconvert or the
+kernel's packages are missing.
 """
+import json
 import os
 import re
 import shutil
@@ -58,7 +60,21 @@ def main() -> int:
         d.terminate()
         d.wait()
         shutil.rmtree(state, ignore_errors=True)
-    return rc
+    return rc or warnings(os.path.join(figures, os.path.basename(notebook)))
+
+
+def warnings(executed: str) -> int:
+    """1 when a cell of the executed notebook wrote a warning (a reader
+    would see it under the cell), after printing it."""
+    with open(executed) as f:
+        cells = json.load(f)["cells"]
+    said = ["".join(out.get("text", "")) for cell in cells
+            for out in cell.get("outputs", [])
+            if out.get("name") == "stderr"]
+    said = [text for text in said if "Warning" in text]
+    for text in said:
+        print("notebooks: a cell warned:\n" + text)
+    return 1 if said else 0
 
 
 if __name__ == "__main__":
