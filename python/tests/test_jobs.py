@@ -81,6 +81,18 @@ def test_submit_wait_results_cancel(monkeypatch: Any) -> None:
         assert state["deleted"] and job.last["status"] == "dismissed"
 
 
+def test_wait_with_tqdm(monkeypatch: Any) -> None:
+    """tqdm installed: wait(progress=True) draws its bar of the items."""
+    pytest.importorskip("tqdm")
+    err = io.StringIO()
+    monkeypatch.setattr("sys.stderr", err)
+    with FakeServer(jobs_routes({"polls": 0, "reads": 0})) as fake:
+        job = stickslip.Client(fake.url).submit("/batch", requests=[])
+        job.wait(progress=True, poll=0.01)
+    assert re.search(r"job j1: 100%\|[^|]*\| 4/4 \[", err.getvalue()), \
+        err.getvalue()
+
+
 def test_failed_job_raises() -> None:
     def status(_: Any) -> Any:
         return {"jobID": "j1", "status": "failed", "progress": 50}
