@@ -177,3 +177,28 @@ def test_sent_request_retried_only_when_idempotent() -> None:
     with pytest.raises(stickslip.TransportError):
         c.submit("/orbit", params=PAPER, kind="overshoot")
     assert server.requests == 4 and slept == []
+
+
+def test_answer_cut_short_asked_again() -> None:
+    """A JSON answer cut inside its body (the connection closed before its
+    Content-Length) is asked again, as a network error is."""
+    served: List[int] = []
+
+    def health(_: Any) -> Any:
+        served.append(1)
+        cut = {"X-Cut": "5"} if len(served) < 3 else {}
+        return (200, dict(cut, **{"Content-Type": "application/json"}),
+                b'{"status":"ok"}')
+
+    with FakeServer({("GET", "/health"): health}) as fake:
+        c = stickslip.Client(fake.url, retries=2)
+        slept: List[float] = []
+        c._t.sleep = slept.append
+        assert c.health() == {"status": "ok"}
+        assert len(served) == 3 and slept == [0.1, 0.2]
+        served.clear()
+        c = stickslip.Client(fake.url, retries=1)
+        c._t.sleep = slept.append
+        with pytest.raises(stickslip.TransportError):
+            c.health()
+        assert len(served) == 2
