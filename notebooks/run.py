@@ -6,16 +6,19 @@
 Starts STICKSLIPD on a free port, with a job store of its own in a
 temporary directory, then `jupyter nbconvert --execute` (from
 Debian's jupyter-nbconvert) with STICKSLIP_URL set to it and the figures
-written to FIGURES_DIR (default: notebooks/figures, the ones the README
-shows); the executed notebook goes beside the figures.  Exits 77 (skipped)
-when nbconvert or the kernel's packages are missing.
+written to FIGURES_DIR (default: notebooks/figures, the committed ones);
+the executed notebook goes beside the figures.  Fails when a cell fails or
+writes a warning, or when a figure the notebook names was not written;
+exits 77 (skipped) when nbconvert or the kernel's packages are missing.
 """
+import json
 import os
 import re
 import shutil
 import subprocess
 import sys
 import tempfile
+import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -49,6 +52,7 @@ def main() -> int:
     env = dict(os.environ, STICKSLIP_URL=m.group(0).rstrip("/"),
                PYDEVD_DISABLE_FILE_VALIDATION="1",
                STICKSLIP_FIGURES=figures)
+    start = time.time()
     try:
         rc = subprocess.run([nbconvert, "--execute", "--to", "notebook",
                              "--ExecutePreprocessor.timeout=120",
@@ -58,7 +62,40 @@ def main() -> int:
         d.terminate()
         d.wait()
         shutil.rmtree(state, ignore_errors=True)
-    return rc
+    executed = os.path.join(figures, os.path.basename(notebook))
+    return rc or warnings(executed) or unwritten(executed, figures, start)
+
+
+def warnings(executed: str) -> int:
+    """1 when a cell of the executed notebook wrote a warning (a reader
+    would see it under the cell), after printing it."""
+    with open(executed) as f:
+        cells = json.load(f)["cells"]
+    said = ["".join(out.get("text", "")) for cell in cells
+            for out in cell.get("outputs", [])
+            if out.get("name") == "stderr"]
+    said = [text for text in said if "Warning" in text]
+    for text in said:
+        print("notebooks: a cell warned:\n" + text)
+    return 1 if said else 0
+
+
+def unwritten(executed: str, figures: str, since: float) -> int:
+    """1 when a figure the notebook's cells name ("name.png") was not
+    written to ``figures`` by this run, after saying which."""
+    with open(executed) as f:
+        cells = json.load(f)["cells"]
+    names = sorted({name for cell in cells if cell["cell_type"] == "code"
+                    for name in re.findall(r'"([\w-]+\.png)"',
+                                           "".join(cell["source"]))})
+    stale = [n for n in names
+             if not os.path.exists(os.path.join(figures, n))
+             or os.path.getmtime(os.path.join(figures, n)) < since - 1]
+    for n in stale:
+        print("notebooks: %s was not written" % n)
+    print("notebooks: %d figures written to %s" % (len(names) - len(stale),
+                                                   figures))
+    return 1 if stale or not names else 0
 
 
 if __name__ == "__main__":

@@ -137,7 +137,7 @@ class Transport:
                 conn.close()
                 refused = isinstance(e, ConnectionRefusedError)
                 if attempt < self.retries and (idempotent or refused):
-                    self.sleep(min(0.1 * 2 ** attempt, 2.0))
+                    self.backoff(attempt)
                     attempt += 1
                     continue
                 raise TransportError("%s %s%s: %s" % (method, self.url, path,
@@ -151,6 +151,10 @@ class Transport:
                 attempt += 1
                 continue
             raise exc
+
+    def backoff(self, attempt: int) -> None:
+        """The wait before the retry after a network error."""
+        self.sleep(min(0.1 * 2 ** attempt, 2.0))
 
     @staticmethod
     def _problem(conn: http.client.HTTPConnection,

@@ -9,7 +9,6 @@ yields the lines as they arrive.
 
 from __future__ import annotations
 
-import http.client
 from typing import (TYPE_CHECKING, Any, Callable, Dict, Iterable, Iterator,
                     List, Mapping, Optional, Sequence, Set, Tuple, Union)
 
@@ -91,14 +90,18 @@ class Client:
 
     def request(self, method: str, path: str, body: Union[bytes, Any] = None,
                 headers: Optional[Mapping[str, str]] = None) -> Any:
-        """Any request whose answer is one JSON document."""
-        ans = self.open(method, path, body, headers)
-        try:
-            return ans.json()
-        except TransportError:
-            raise
-        except (OSError, http.client.HTTPException) as e:
-            raise TransportError(str(e)) from e
+        """Any idempotent request whose answer is one JSON document; an
+        answer cut short is asked again, as a network error is."""
+        attempt = 0
+        while True:
+            ans = self.open(method, path, body, headers)
+            try:
+                return ans.json()
+            except TransportError:
+                if attempt == self._t.retries:
+                    raise
+                self._t.backoff(attempt)
+                attempt += 1
 
     def _post(self, path: str, body: Optional[Body],
               fields: Mapping[str, Any]) -> JSON:

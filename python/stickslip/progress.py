@@ -1,10 +1,12 @@
 """A progress bar: tqdm's when it is installed (its notebook widget in a
-notebook), otherwise one line rewritten in place on a terminal and a line
-every tenth of the way elsewhere (a log, a notebook without tqdm)."""
+notebook with ipywidgets, its text bar in one without), otherwise one line
+rewritten in place on a terminal and a line every tenth of the way
+elsewhere (a log, a notebook without tqdm)."""
 
 from __future__ import annotations
 
 import sys
+import warnings
 from typing import Any, Optional, TextIO
 
 
@@ -21,7 +23,11 @@ class Progress:
         if not enabled:
             return
         try:
-            from tqdm.auto import tqdm
+            with warnings.catch_warnings():
+                # in a notebook without ipywidgets tqdm.auto warns, then
+                # draws its text bar: what such a notebook can show
+                warnings.simplefilter("ignore")
+                from tqdm.auto import tqdm
         except ImportError:
             self._show()
             return

@@ -1,6 +1,7 @@
 """A small HTTP server in the test process, for answers the daemon cannot
-be made to give on demand (a 503 line inside a batch; jobs, whose service
-is not in this daemon yet).  ``routes``: (method, path) -> a function of the
+be made to give on demand (a 503 line inside a batch, a job whose status
+moves one item a poll, problems no request provokes, a 503's delay, an
+answer cut inside its body).  ``routes``: (method, path) -> a function of the
 request's JSON body returning a dict (JSON), a list (NDJSON lines) or a
 tuple (status, headers, body bytes)."""
 

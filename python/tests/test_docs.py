@@ -37,10 +37,12 @@ EXAMPLES = examples()
 
 
 def test_readme_has_one() -> None:
-    # the README's one Python call, short enough to read at a glance
+    # the README's one Python call, short enough to read at a glance, with
+    # its output shown (and so checked by test_example)
     mine = [e for e in EXAMPLES if e[0] == "README.md"]
     assert len(mine) == 1
     assert len(mine[0][2].strip().splitlines()) <= 10
+    assert mine[0][3]
 
 
 @pytest.fixture(scope="module")

@@ -15,6 +15,7 @@ from typing import Any, Callable, Dict, List
 import pytest
 
 import stickslip
+from stickslip.progress import Progress
 from conftest import PAPER, Daemon
 from fake import FakeServer
 from proxy import CuttingProxy
@@ -79,6 +80,40 @@ def test_submit_wait_results_cancel(monkeypatch: Any) -> None:
         assert got == LINES[:-1] and lines.done == LINES[-1]
         job.cancel()
         assert state["deleted"] and job.last["status"] == "dismissed"
+
+
+def test_wait_with_tqdm(monkeypatch: Any) -> None:
+    """tqdm installed: wait(progress=True) draws its bar of the items."""
+    pytest.importorskip("tqdm")
+    err = io.StringIO()
+    monkeypatch.setattr("sys.stderr", err)
+    with FakeServer(jobs_routes({"polls": 0, "reads": 0})) as fake:
+        job = stickslip.Client(fake.url).submit("/batch", requests=[])
+        job.wait(progress=True, poll=0.01)
+    assert re.search(r"job j1: 100%\|[^|]*\| 4/4 \[", err.getvalue()), \
+        err.getvalue()
+
+
+def test_plain_line_on_a_terminal(monkeypatch: Any) -> None:
+    """Without tqdm, on a terminal: one line rewritten in place at each
+    step, ended when the bar closes; in a log, a line every tenth."""
+    no_tqdm(monkeypatch)
+
+    class Tty(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+    for stream, want in ((Tty(), "\rsweep: 0/4 (0%)\rsweep: 1/4 (25%)"
+                          "\rsweep: 2/4 (50%)\rsweep: 3/4 (75%)"
+                          "\rsweep: 4/4 (100%)\n"),
+                         (io.StringIO(), "".join(
+                             "sweep: %d/20 (%d%%)\n" % (n, 5 * n)
+                             for n in range(0, 21, 2)))):
+        bar = Progress(4 if want.startswith("\r") else 20, "sweep",
+                       stream=stream)
+        for _ in range(bar.total or 0):
+            bar.update()
+        bar.close()
+        assert stream.getvalue() == want
 
 
 def test_failed_job_raises() -> None:

@@ -9,7 +9,7 @@ import shutil
 import subprocess
 import sys
 import venv
-from typing import Any
+from typing import Any, List
 
 from conftest import HERE, Daemon
 
@@ -45,19 +45,22 @@ def test_without_numpy_and_pandas(daemon: Daemon) -> None:
 
 
 def test_pip_install_offline(tmp_path: Any) -> None:
-    # from a copy: setuptools builds in the source tree
-    src = str(tmp_path / "src")
+    """``pip install ./python`` as a user runs it: in a venv of its own
+    (no system packages), with pip's isolated build and no index; then
+    the package, its py.typed and its command are there, and nothing else
+    came with it."""
+    src = str(tmp_path / "src")  # a copy: the source tree stays as it is
     shutil.copytree(os.path.dirname(HERE), src, ignore=shutil.ignore_patterns(
-        "build", "*.egg-info", "__pycache__", ".*cache"))
+        "tests", "__pycache__", ".*cache"))
     env_dir = str(tmp_path / "venv")
-    venv.create(env_dir, system_site_packages=True, with_pip=False)
+    venv.create(env_dir, with_pip=True)
     py = os.path.join(env_dir, "bin", "python")
-    out = subprocess.run([py, "-m", "pip", "install", "--no-index",
-                          "--no-build-isolation", "--no-deps", "-q",
-                          src],
-                         capture_output=True, text=True, timeout=300,
+    before = pip_list(py)
+    out = subprocess.run([py, "-m", "pip", "install", "--no-index", "-q",
+                          src], capture_output=True, text=True, timeout=300,
                          cwd=str(tmp_path))
     assert out.returncode == 0, out.stderr
+    assert pip_list(py) == sorted(before + ["stickslip"])
     out = subprocess.run([py, "-c", "import stickslip, os; "
                           "print(os.path.dirname(stickslip.__file__)); "
                           "print(os.path.exists(os.path.join("
@@ -65,3 +68,12 @@ def test_pip_install_offline(tmp_path: Any) -> None:
                          capture_output=True, text=True, cwd=str(tmp_path))
     where, typed = out.stdout.split()
     assert where.startswith(env_dir) and typed == "True"
+    out = subprocess.run([os.path.join(env_dir, "bin", "stickslip"),
+                          "--help"], capture_output=True, text=True)
+    assert out.returncode == 0 and "orbit" in out.stdout
+
+
+def pip_list(py: str) -> List[str]:
+    out = subprocess.run([py, "-m", "pip", "list", "--format", "freeze"],
+                         capture_output=True, text=True, check=True)
+    return sorted(line.split("==")[0] for line in out.stdout.split())

@@ -1,10 +1,13 @@
 """Streams cut mid-way: a proxy in the test process forwards to the live
 daemon and cuts the first answer after its first lines; the client asks
-again for what is missing and yields every line once."""
+again for what is missing and yields every line once.  And lines yielded
+as they arrive, before the answer's end."""
 
 from __future__ import annotations
 
 import json
+import socket
+import threading
 
 import stickslip
 from conftest import PAPER, Daemon
@@ -43,3 +46,52 @@ def test_map_cut_resumed(daemon: Daemon) -> None:
     assert got == daemon.client().map(body).gather()
     assert lines.done is not None and lines.done["cells"] == 5
     assert len(proxy.requests) == 2
+
+
+class Trickle:
+    """A server in the test process that answers every POST with one
+    NDJSON line, then holds the rest of its answer until ``go`` is set
+    (at most 10 s): ``held`` says whether it had to wait the 10 s."""
+
+    def __init__(self, first: bytes, rest: bytes) -> None:
+        self.go = threading.Event()
+        self.held = False
+        self.first, self.rest = first, rest
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(4)
+        self.url = "http://127.0.0.1:%d" % self.sock.getsockname()[1]
+        threading.Thread(target=self.serve, daemon=True).start()
+
+    def serve(self) -> None:
+        conn, _ = self.sock.accept()
+        got = b""
+        while b"\r\n\r\n" not in got:
+            got += conn.recv(65536)
+
+        def chunk(data: bytes) -> bytes:
+            return b"%x\r\n%s\r\n" % (len(data), data)
+        conn.sendall(b"HTTP/1.1 200 OK\r\nContent-Type: application/x-ndjson"
+                     b"\r\nTransfer-Encoding: chunked\r\n\r\n" +
+                     chunk(self.first))
+        self.held = not self.go.wait(10)
+        conn.sendall(chunk(self.rest) + b"0\r\n\r\n")
+        conn.close()
+
+
+def test_lines_yielded_as_they_arrive() -> None:
+    """The first line of a map and of a batch is yielded while the rest of
+    the answer has not been sent."""
+    cell = json.dumps({"index": [0], "at": {"ur": 0.5}, "orbits": [],
+                       "complete": True}).encode() + b"\n"
+    item = json.dumps({"id": 0, "index": 0, "status": 200,
+                       "body": {}}).encode() + b"\n"
+    for first, call in (
+            (cell, lambda c: c.map(params=PAPER)),
+            (item, lambda c: c.batch([{"path": "/health", "body": {}}]))):
+        server = Trickle(first, b'{"done":true}\n')
+        lines = call(stickslip.Client(server.url, retries=0))
+        assert next(lines) == json.loads(first)
+        server.go.set()
+        assert list(lines) == [] and lines.done == {"done": True}
+        assert not server.held

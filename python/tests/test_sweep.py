@@ -1,9 +1,10 @@
 """Sweeps, as /batch jobs and as batches (a daemon with --no-jobs):
 results in the items' order, under the daemon's limits, interrupted and
-resumed with no item computed twice (counted at the daemon: the chunks of
-jobs it computed, stickslip_job_chunks_total, and the jobs it holds; or
-the batch items, stickslip_batch_items_total), a torn journal, 503 lines
-sent again."""
+resumed, counted at the daemon: as jobs, no item computed twice (the
+chunks it computed, stickslip_job_chunks_total, are the one job's); as
+batches, no item of the journal computed again (stickslip_batch_items_total;
+the items in flight when the first sweep was killed are computed again,
+their lines lost with it); a torn journal, 503 lines sent again."""
 
 from __future__ import annotations
 
