@@ -259,7 +259,9 @@ static void runner_unlock(srv__batch *b) {
 }
 
 /* A run: the batch's next items, one after another, each line into the
- * batch's buffer, until the slice is used up or no item may be taken. */
+ * batch's buffer, until the slice is used up or no item may be taken.  The
+ * batch is held once an item: its line put and the next item claimed
+ * together. */
 static void runner_run(srv_job *j) {
   runner *ru = (runner *)j;
   srv__batch *b = ru->b;
@@ -267,13 +269,11 @@ static void runner_run(srv_job *j) {
   api_server_info info = srv__server_info(d, j);
   double t0 = srv__now();
   int woke = 0;
-  for (;;) {
-    size_t i;
-    pthread_mutex_lock(&b->mu);
-    int what = claim(b, ru, &i);
-    runner_unlock(b);
-    if (!what)
-      break;
+  size_t i;
+  pthread_mutex_lock(&b->mu);
+  int what = claim(b, ru, &i);
+  runner_unlock(b);
+  while (what) {
     api_response ar;
     if (what == 2)
       srv__budget_problem(d, b->key, &ar);
@@ -284,6 +284,7 @@ static void runner_run(srv_job *j) {
     api_stream *s;
     ru->len = 0;
     int rc = line_of(b, i, &ar, &ru->text, &ru->len, &ru->cap, &s, &held);
+    int more = srv__now() - t0 <= RUN_SLICE;
     pthread_mutex_lock(&b->mu);
     if (rc == 0 && ru->len)
       rc = out_put(b, ru->text, ru->len);
@@ -295,14 +296,13 @@ static void runner_run(srv_job *j) {
       woke = 1;
       MHD_resume_connection(b->c);
     }
+    what = more ? claim(b, ru, &i) : 0;
     runner_unlock(b);
     if (ru->cap > BATCH_BUFFER) { /* a large line: its room not kept */
       free(ru->text);
       ru->text = NULL;
       ru->cap = 0;
     }
-    if (srv__now() - t0 > RUN_SLICE)
-      break;
   }
 }
 
