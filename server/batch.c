@@ -8,9 +8,9 @@
  * A batch's answer is one chunked response whose lines are written as its
  * items are done.  Its items are computed by at most batch_parallel
  * runners, jobs of the pool in the queue of the batch's client like any
- * request.  A runner takes the batch's next items one after another for a
- * slice of time (RUN_SLICE), writes each one's line into the batch's buffer
- * of lines, and goes back to the end of its client's queue, so that the
+ * request.  A runner takes the batch's next items in ranges for a slice of
+ * time (RUN_SLICE), writes a range's lines into the batch's buffer of lines
+ * at once, and goes back to the end of its client's queue, so that the
  * client's other requests, and other clients, get their turn between runs
  * as they would between requests; the I/O thread is woken at most twice
  * per run (for its first line, and at its end), not once per item.  An item
@@ -38,6 +38,9 @@
  * others wait at most about this long for a worker a batch holds, and the
  * run's hand-offs cost a few microseconds in a millisecond. */
 #define RUN_SLICE 1e-3
+/* The most items a run claims at once: its lines are put in the batch's
+ * buffer together, and the batch held once for them. */
+#define RUN_RANGE 16
 /* Lines not yet written that stop the runners: a stream chunk, what the
  * response's reader takes at a time (of a client that does not read, the
  * batch then holds about this much, not answers). */
@@ -225,9 +228,10 @@ static void item_problem(srv__batch *b, api_problem_kind kind,
   item_now(b, &ar);
 }
 
-/* The next item for runner @a ru into *i (under b->mu): 1 to compute it,
- * 2 to answer it with the budget's 503, 0 to end the run. */
-static int claim(srv__batch *b, runner *ru, size_t *i) {
+/* The next items for runner @a ru, at most @a most of them, from *i on,
+ * their count in *n (under b->mu): 1 to compute them, 2 to answer one with
+ * the budget's 503, 0 to end the run. */
+static int claim(srv__batch *b, runner *ru, size_t most, size_t *i, size_t *n) {
   struct srv_daemon *d = b->d;
   if (atomic_load(&b->gone) || atomic_load(&ru->job.cancel) ||
       atomic_load(&d->draining) || b->broken || b->next == b->n ||
@@ -239,8 +243,11 @@ static int claim(srv__batch *b, runner *ru, size_t *i) {
     if (lines_held(b) || b->in_pool > 1)
       return 0;
     rc = 2;
+    most = 1;
   }
-  *i = b->next++;
+  *i = b->next;
+  *n = b->n - b->next < most ? b->n - b->next : most;
+  b->next += *n;
   return rc;
 }
 
@@ -258,8 +265,29 @@ static void runner_unlock(srv__batch *b) {
   }
 }
 
-/* A run: the batch's next items, one after another, each line into the
- * batch's buffer, until the slice is used up or no item may be taken. */
+/* An item of a run, computed, its line not yet counted. */
+typedef struct item_done {
+  int status, rc;
+  api_stream *s; /* its line when it is a stream */
+  size_t held;
+} item_done;
+
+/* How many items a run claims at once, after the first (claimed alone, so
+ * that its line goes out while the others compute, which may be long). */
+static size_t run_claims(double t0, double now, size_t done) {
+  double left = RUN_SLICE - (now - t0), per = (now - t0) / (double)done;
+  if (left <= 0)
+    return 0;
+  if (per <= 0 || left / per >= RUN_RANGE)
+    return RUN_RANGE;
+  return left / per >= 1 ? (size_t)(left / per) : 1;
+}
+
+/* A run: the batch's next items, computed in ranges whose lines are put in
+ * the batch's buffer together, until the slice is used up or no item may be
+ * taken.  The batch is held once a range: its lines put and the next range
+ * claimed together; a range is as many items as the run's own pace fits in
+ * what is left of its slice, so that a range of long items is one item. */
 static void runner_run(srv_job *j) {
   runner *ru = (runner *)j;
   srv__batch *b = ru->b;
@@ -267,42 +295,50 @@ static void runner_run(srv_job *j) {
   api_server_info info = srv__server_info(d, j);
   double t0 = srv__now();
   int woke = 0;
-  for (;;) {
-    size_t i;
-    pthread_mutex_lock(&b->mu);
-    int what = claim(b, ru, &i);
-    runner_unlock(b);
-    if (!what)
-      break;
-    api_response ar;
-    if (what == 2)
-      srv__budget_problem(d, b->key, &ar);
-    else
-      api_batch_run(b->ab, i, &d->cfg.lim, &info, &ar);
-    int status = ar.status;
-    size_t held = 0;
-    api_stream *s;
+  size_t i, n, done = 0;
+  pthread_mutex_lock(&b->mu);
+  int what = claim(b, ru, 1, &i, &n);
+  runner_unlock(b);
+  while (what) {
+    item_done it[RUN_RANGE];
     ru->len = 0;
-    int rc = line_of(b, i, &ar, &ru->text, &ru->len, &ru->cap, &s, &held);
+    for (size_t k = 0; k < n; k++) {
+      api_response ar;
+      if (what == 2)
+        srv__budget_problem(d, b->key, &ar);
+      else
+        api_batch_run(b->ab, i + k, &d->cfg.lim, &info, &ar);
+      it[k].status = ar.status;
+      it[k].held = 0;
+      it[k].rc = line_of(b, i + k, &ar, &ru->text, &ru->len, &ru->cap, &it[k].s,
+                         &it[k].held);
+    }
+    done += n;
+    size_t most = run_claims(t0, srv__now(), done);
     pthread_mutex_lock(&b->mu);
-    if (rc == 0 && ru->len)
-      rc = out_put(b, ru->text, ru->len);
-    line_made(b, i, status, rc, s, held);
+    int put = ru->len ? out_put(b, ru->text, ru->len) : 0;
+    for (size_t k = 0; k < n; k++)
+      line_made(b, i + k, it[k].status, put < 0 ? -1 : it[k].rc, it[k].s,
+                it[k].held);
     if (!woke && b->waiting && b->c) {
-      /* the first line of the run goes out while the next item computes
+      /* the first line of the run goes out while the next items compute
        * (which may be long); the others at the run's end */
       b->waiting = 0;
       woke = 1;
       MHD_resume_connection(b->c);
     }
+    /* no more lines, at the range's pace, than the buffer has room for */
+    size_t line = ru->len / n, pending = b->out_len - b->out_off;
+    if (line && pending < BATCH_BUFFER &&
+        most > (BATCH_BUFFER - pending) / line)
+      most = (BATCH_BUFFER - pending) / line + 1;
+    what = most ? claim(b, ru, most, &i, &n) : 0;
     runner_unlock(b);
     if (ru->cap > BATCH_BUFFER) { /* a large line: its room not kept */
       free(ru->text);
       ru->text = NULL;
       ru->cap = 0;
     }
-    if (srv__now() - t0 > RUN_SLICE)
-      break;
   }
 }
 

@@ -26,13 +26,15 @@
 #include "decode.h"
 #include "job.h"
 #include "problem.h"
+#include "scan.h"
 #include "writer.h"
 
 typedef struct batch_item {
   char *id;     /* the compact JSON text of its id; "null" when none */
   size_t ep;    /* its endpoint */
-  char *body;   /* the compact text of its body; NULL when the item is bad */
+  char *body;   /* the text of its body; NULL when the item is bad */
   size_t len;   /* of body */
+  int shared;   /* body is a slice of the batch's text, not its own */
   api_err *bad; /* why the item is refused, or NULL */
 } batch_item;
 
@@ -40,6 +42,7 @@ struct api_batch {
   batch_item *items;
   size_t n;
   size_t held;
+  char *text; /* the body's text, when items' bodies are slices of it */
 };
 
 static const char *const ITEM_KEYS = "id, path, body";
@@ -57,10 +60,12 @@ void api_batch_free(api_batch *b) {
     return;
   for (size_t i = 0; i < b->n; i++) {
     free(b->items[i].id);
-    free(b->items[i].body);
+    if (!b->items[i].shared)
+      free(b->items[i].body);
     free(b->items[i].bad);
   }
   free(b->items);
+  free(b->text);
   free(b);
 }
 
@@ -167,6 +172,66 @@ static int item_set(api_batch *b, size_t i, const json_t *v,
   return 0;
 }
 
+/* An id whose text is the same as its dump: null, a string without
+ * escapes, an integer (not -0, which is 0). */
+static int id_plain(const api_scan_member *id) {
+  const char *v = id->value;
+  size_t n = id->value_len;
+  if (*v == 'n' || *v == '"')
+    return !memchr(v, '\\', n);
+  if (n == 2 && !memcmp(v, "-0", 2))
+    return 0;
+  for (size_t k = *v == '-'; k < n; k++)
+    if (v[k] < '0' || v[k] > '9')
+      return 0;
+  return 1;
+}
+
+/* Item @a i from the members @a t of its object, scanned in the batch's
+ * text, when they are the plain case: only id, path and body, the id's
+ * text its dump (id_plain), the path one of a computing endpoint, the body
+ * an object; 1 when set (its body a slice of the text), 0 when not the
+ * plain case (left to item_set), -1 when out of memory. */
+static int item_plain(api_batch *b, size_t i, const api_scan_top *t,
+                      const api_call *c) {
+  const api_scan_member *id = NULL, *path = NULL, *body = NULL;
+  for (size_t k = 0; k < t->n; k++) {
+    const api_scan_member *m = &t->m[k];
+    const api_scan_member **to = NULL;
+    if (k >= API_SCAN_MEMBERS)
+      return 0;
+    if (m->key_len == 2 && memcmp(m->key, "id", 2) == 0)
+      to = &id;
+    else if (m->key_len == 4 && memcmp(m->key, "path", 4) == 0)
+      to = &path;
+    else if (m->key_len == 4 && memcmp(m->key, "body", 4) == 0)
+      to = &body;
+    if (!to)
+      return 0;
+    *to = m;
+  }
+  char ps[64];
+  size_t ep;
+  if (!path || !body || *path->value != '"' || *body->value != '{' ||
+      path->value_len > sizeof ps + 1 ||
+      memchr(path->value, '\\', path->value_len) || (id && !id_plain(id)))
+    return 0;
+  memcpy(ps, path->value + 1, path->value_len - 2);
+  ps[path->value_len - 2] = 0;
+  if (api_route("POST", ps, &ep) != 200 ||
+      api_endpoint_at(ep)->run_class != API_RUN_COMPUTE)
+    return 0;
+  batch_item *it = &b->items[i];
+  if (id && !(it->id = strndup(id->value, id->value_len)))
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  it->ep = ep;
+  it->body = (char *)body->value;
+  it->len = body->value_len;
+  it->shared = 1;
+  b->held += (it->id ? strlen(it->id) : 0) + sizeof *it;
+  return 1;
+}
+
 /* The batch of the parsed body @a root; NULL with the problem in c->e. */
 static api_batch *batch_of(const json_t *root, const api_call *c) {
   const char *k;
@@ -212,17 +277,167 @@ static api_batch *batch_of(const json_t *root, const api_call *c) {
   return b;
 }
 
+/*
+ * A body is read an item at a time when it is of the usual shape,
+ *   {"requests": [item, item, ...]}
+ * with nothing else and only JSON whitespace between.  A plain item (what
+ * api__json_scan vouches for, with only id, path and body, item_plain) is
+ * checked in the text without a tree and keeps its body as a slice of the
+ * batch's copy of the text, so that its body is parsed once, when the item
+ * is served, instead of parsed with the whole body, written back to text
+ * and parsed again (jansson's parse of an /orbit item costs a third of its
+ * solve).  Another item is parsed alone and kept as the whole body's parse
+ * would keep it, its tree freed at once: a job's body may be far larger
+ * than a synchronous one (a sweep of a million items), and jansson's tree
+ * of it is some twenty times its size (100 000 /orbit items: 13 MB of text,
+ * 250 MB of tree).  Any other body, and any item or nesting that jansson or
+ * the depth limit would refuse, is left to the whole parse (0), which then
+ * answers its problem exactly, line and column.
+ */
+static const char *skip_ws(const char *p, const char *end) {
+  while (p < end && (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r'))
+    p++;
+  return p;
+}
+
+/* The end of the JSON value at @a p, which only delimits it (jansson
+ * checks it), and its nesting depth in *depth; NULL when it does not end. */
+static const char *value_end(const char *p, const char *end, int *depth) {
+  int d = 0;
+  *depth = 0;
+  for (; p < end; p++) {
+    char ch = *p;
+    if (ch == '"') {
+      for (p++; p < end && *p != '"'; p++)
+        p += *p == '\\';
+      if (p >= end)
+        return NULL;
+      if (d == 0)
+        return p + 1;
+    } else if (ch == '{' || ch == '[') {
+      if (++d > *depth)
+        *depth = d;
+    } else if (ch == '}' || ch == ']') {
+      if (d == 0)
+        return p;
+      if (--d == 0)
+        return p + 1;
+    } else if (d == 0 && (ch == ',' || ch == ' ' || ch == '\t' || ch == '\n' ||
+                          ch == '\r')) {
+      return p;
+    }
+  }
+  return d == 0 ? p : NULL;
+}
+
+/* Item @a i from its text @a p to @a q: scanned and set without a tree in
+ * the plain case (item_plain), or else parsed alone and set as the whole
+ * body's parse would set it.  1, 0 when it is not an item that jansson
+ * reads (left to the whole parse), -1 when out of memory. */
+static int item_of_text(api_batch *b, size_t i, const char *p, const char *q,
+                        int scanned, const api_scan_top *t, const api_call *c) {
+  int rc = scanned ? item_plain(b, i, t, c) : 0;
+  if (rc != 0)
+    return rc;
+  json_error_t jerr;
+  json_t *v = json_loadb(p, (size_t)(q - p), JSON_REJECT_DUPLICATES, &jerr);
+  if (!v)
+    return 0;
+  rc = item_set(b, i, v, c);
+  json_decref(v);
+  return rc == 0 ? 1 : -1;
+}
+
+/* The items of @a body, counted (@a b NULL) or set: 1, 0 when the body is
+ * not of the usual shape or an item is not one jansson reads, -1 when out
+ * of memory. */
+static int items_of_text(const char *body, size_t len, const api_call *c,
+                         api_batch *b, size_t *n) {
+  static const char HEAD[] = "\"requests\"";
+  const char *p = skip_ws(body, body + len), *end = body + len;
+  int depth;
+  *n = 0;
+  if (p == end || *p != '{')
+    return 0;
+  p = skip_ws(p + 1, end);
+  if ((size_t)(end - p) < sizeof HEAD - 1 || memcmp(p, HEAD, sizeof HEAD - 1))
+    return 0;
+  p = skip_ws(p + sizeof HEAD - 1, end);
+  if (p == end || *p != ':')
+    return 0;
+  p = skip_ws(p + 1, end);
+  if (p == end || *p != '[')
+    return 0;
+  int comma = 0; /* the last thing read was a comma */
+  for (p = skip_ws(p + 1, end); p < end && *p != ']';) {
+    api_scan_top top;
+    const char *q = api__json_scan(p, end, c->lim->max_depth - 2, &top);
+    int scanned = q != NULL;
+    if (!q && (!(q = value_end(p, end, &depth)) || q == p ||
+               depth + 2 > c->lim->max_depth))
+      return 0;
+    if (b) {
+      int rc = item_of_text(b, *n, p, q, scanned, &top, c);
+      if (rc != 1)
+        return rc;
+    }
+    (*n)++;
+    p = skip_ws(q, end);
+    comma = p < end && *p == ',';
+    if (comma)
+      p = skip_ws(p + 1, end);
+    else if (p == end || *p != ']')
+      return 0;
+  }
+  if (p == end || comma)
+    return 0; /* no closing bracket, or a comma before it */
+  p = skip_ws(p + 1, end);
+  return p < end && *p == '}' && skip_ws(p + 1, end) == end;
+}
+
+/* The batch of @a body read an item at a time (items_of_text), its text
+ * kept for the items' bodies: 1, 0 when the body is left to the whole
+ * parse (another shape, an item jansson does not read, no items or too
+ * many: the whole parse then tells which), -1 when out of memory. */
+static int batch_of_text(const char *body, size_t len, const api_call *c,
+                         api_batch **bp) {
+  size_t n, set;
+  *bp = NULL;
+  if (items_of_text(body, len, c, NULL, &n) != 1 || n == 0 ||
+      n > c->lim->max_batch_items)
+    return 0;
+  api_batch *b = batch_new(n, c);
+  if (!b)
+    return -1;
+  if (!(b->text = malloc(len ? len : 1))) {
+    api_batch_free(b);
+    return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL, "out of memory");
+  }
+  memcpy(b->text, body, len);
+  b->held += len;
+  int rc = items_of_text(b->text, len, c, b, &set);
+  if (rc == 1 && set == n) {
+    *bp = b;
+    return 1;
+  }
+  api_batch_free(b);
+  return rc < 0 ? -1 : 0;
+}
+
 int api_batch_open(const char *body, size_t len, const api_limits *lim,
                    api_batch **b, api_response *out) {
   api_err e;
   api_call c = {lim, NULL, &e, NULL};
   memset(&e, 0, sizeof e);
   memset(out, 0, sizeof *out);
-  api_arena_mark mark; /* the batch's tree, freed once its items are kept */
+  api_arena_mark mark; /* the items' trees, freed once each is kept */
   api__arena_begin(&mark);
-  json_t *root = api__parse(body ? body : "", len, lim, &e);
-  *b = root ? batch_of(root, &c) : NULL;
-  json_decref(root);
+  int rc = body ? batch_of_text(body, len, &c, b) : 0;
+  if (rc == 0) {
+    json_t *root = api__parse(body ? body : "", len, lim, &e);
+    *b = root ? batch_of(root, &c) : NULL;
+    json_decref(root);
+  }
   api__arena_end(&mark);
   if (!*b) {
     api__problem_response(&e, out);
@@ -444,121 +659,19 @@ enum { BATCH_CHUNK = 32 };
 ep_job_cut_fn ep_batch_job_cut;
 ep_job_run_fn ep_batch_job_run;
 
-/*
- * A job's body may be far larger than a synchronous one (a sweep of a
- * million items), and jansson's tree of it is some twenty times its size
- * (100 000 /orbit items: 13 MB of text, 250 MB of tree, most of the second
- * it takes to open).  So a batch job's body of the usual shape,
- *   {"requests": [item, item, ...]}
- * with nothing else and only JSON whitespace between, is read an item at a
- * time: each item delimited in the text, parsed alone and kept as the
- * whole body's parse would keep it, its tree freed at once.  Any other
- * body, and any item or nesting that jansson or the depth limit would
- * refuse, is left to the whole parse (0), which then answers exactly what
- * the synchronous request answers.
- */
-static const char *skip_ws(const char *p, const char *end) {
-  while (p < end && (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r'))
-    p++;
-  return p;
-}
-
-/* The end of the JSON value at @a p, which only delimits it (jansson
- * checks it), and its nesting depth in *depth; NULL when it does not end. */
-static const char *value_end(const char *p, const char *end, int *depth) {
-  int d = 0;
-  *depth = 0;
-  for (; p < end; p++) {
-    char ch = *p;
-    if (ch == '"') {
-      for (p++; p < end && *p != '"'; p++)
-        p += *p == '\\';
-      if (p >= end)
-        return NULL;
-      if (d == 0)
-        return p + 1;
-    } else if (ch == '{' || ch == '[') {
-      if (++d > *depth)
-        *depth = d;
-    } else if (ch == '}' || ch == ']') {
-      if (d == 0)
-        return p;
-      if (--d == 0)
-        return p + 1;
-    } else if (d == 0 && (ch == ',' || ch == ' ' || ch == '\t' || ch == '\n' ||
-                          ch == '\r')) {
-      return p;
-    }
-  }
-  return d == 0 ? p : NULL;
-}
-
-/* The items of @a body, counted (@a b NULL) or set: 1, 0 when the body is
- * not of the usual shape or an item is not one jansson reads, -1 when out
- * of memory. */
-static int items_of_text(const char *body, size_t len, const api_call *c,
-                         api_batch *b, size_t *n) {
-  static const char HEAD[] = "\"requests\"";
-  const char *p = skip_ws(body, body + len), *end = body + len;
-  int depth;
-  *n = 0;
-  if (p == end || *p != '{')
-    return 0;
-  p = skip_ws(p + 1, end);
-  if ((size_t)(end - p) < sizeof HEAD - 1 || memcmp(p, HEAD, sizeof HEAD - 1))
-    return 0;
-  p = skip_ws(p + sizeof HEAD - 1, end);
-  if (p == end || *p != ':')
-    return 0;
-  p = skip_ws(p + 1, end);
-  if (p == end || *p != '[')
-    return 0;
-  int comma = 0; /* the last thing read was a comma */
-  for (p = skip_ws(p + 1, end); p < end && *p != ']';) {
-    const char *q = value_end(p, end, &depth);
-    if (!q || q == p || depth + 2 > c->lim->max_depth)
-      return 0;
-    if (b) {
-      json_error_t jerr;
-      json_t *v = json_loadb(p, (size_t)(q - p), JSON_REJECT_DUPLICATES, &jerr);
-      if (!v)
-        return 0;
-      int rc = item_set(b, *n, v, c);
-      json_decref(v);
-      if (rc != 0)
-        return -1;
-    }
-    (*n)++;
-    p = skip_ws(q, end);
-    comma = p < end && *p == ',';
-    if (comma)
-      p = skip_ws(p + 1, end);
-    else if (p == end || *p != ']')
-      return 0;
-  }
-  if (p == end || comma)
-    return 0; /* no closing bracket, or a comma before it */
-  p = skip_ws(p + 1, end);
-  return p < end && *p == '}' && skip_ws(p + 1, end) == end;
-}
-
 ep_job_open_fn ep_batch_job_open;
 
 int ep_batch_job_open(const char *body, size_t len, const api_call *c,
                       void **xp) {
-  size_t n, set;
-  if (items_of_text(body, len, c, NULL, &n) != 1 || n == 0 ||
-      n > c->lim->max_batch_items)
-    return 0;
   batch_x *x = api__alloc(sizeof *x, xp, c);
-  if (!x || !(x->b = batch_new(n, c)))
+  if (!x)
     return -1;
-  int rc = items_of_text(body, len, c, x->b, &set);
-  if (rc == 1 && set == n)
-    return 1;
-  ep_batch_release(x);
-  *xp = NULL;
-  return rc < 0 ? -1 : 0;
+  int rc = batch_of_text(body, len, c, &x->b);
+  if (rc != 1) {
+    ep_batch_release(x);
+    *xp = NULL;
+  }
+  return rc;
 }
 
 static size_t groups_of(const api_batch *b) {

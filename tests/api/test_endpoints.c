@@ -422,6 +422,48 @@ static char *read_all(api_stream *s, size_t step) {
 /* EVIDENCE: README "Batches": an item's line carries the answer its body
  * gets when posted alone; a bad item gets its own line, with a pointer into
  * the item, and the others go on; the last line counts them */
+/* A batch's body is checked in its text, item by item, where it can be:
+ * whatever that check lets through must be what jansson reads, so that a
+ * body jansson refuses gets the whole parse's problem (its line and column),
+ * and the items' lines are those of the whole parse's items. */
+static void test_batch_text(void) {
+  static const char *const bad[] = {
+      "{\"a\":1,\"a\":2}",             /* a key twice */
+      "{\"p\":{\"c\":1,\"c\":1}}",     /* a key twice, deeper */
+      "{\"a\":1e400}",                 /* a real over a double */
+      "{\"a\":123456789012345678901}", /* an integer over 64 bits */
+      "{\"a\":\"\\u0000\"}",           /* NUL */
+      "{\"a\":\"\\ud800\"}",           /* a lone surrogate */
+      "{\"a\":\"x\x01\"}",             /* a control character */
+      "{\"a\":\"\xff\"}",              /* not UTF-8 */
+      "{\"a\":01}",                    /* a leading zero */
+      "{\"a\":1,}",                    /* a comma before the brace */
+      "{\"a\":-}",
+      "{\"a\":tru}",
+  };
+  api_limits lim;
+  api_limits_default(&lim);
+  size_t ep;
+  ASSERT_EQ_INT(api_route("POST", "/batch", &ep), 200);
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    char body[256];
+    snprintf(body, sizeof body,
+             "{\"requests\":[{\"id\":1,\"path\":\"/stability\",\"body\":%s}]}",
+             bad[i]);
+    api_batch *b = NULL;
+    api_response open, whole;
+    int rc = api_batch_open(body, strlen(body), &lim, &b, &open);
+    api_handle(ep, body, strlen(body), &lim, NULL, &whole);
+    ASSERT_EQ_INT(rc, -1);
+    ASSERT_EQ_INT(open.status, 400);
+    ASSERT_EQ_INT(whole.status, 400);
+    ASSERT_TRUE(open.body && whole.body && !strcmp(open.body, whole.body));
+    api_batch_free(b);
+    api_response_free(&open);
+    api_response_free(&whole);
+  }
+}
+
 static void test_batch(void) {
   static const char *const orbit =
       "{\"params\":{\"chi\":0.2,\"eta\":4,\"us\":0.0724,\"ur\":0.6178,"
@@ -498,7 +540,8 @@ static void test_batch(void) {
   api_response_free(&whole);
 
   /* item by item, as the server runs them: each line is one line of JSON,
-   * however it is read, and the batch keeps its items' bodies only */
+   * however it is read, and the batch keeps its body's text and a few words
+   * an item, no tree */
   api_batch *b;
   api_response out;
   ASSERT_EQ_INT(api_batch_open(body, strlen(body), &lim, &b, &out), 0);
@@ -589,6 +632,7 @@ int main(int argc, char **argv) {
   test_status_table();
   test_streams();
   test_batch();
+  test_batch_text();
   test_continue_fields();
   TEST_DONE();
 }
