@@ -554,14 +554,18 @@ int main(int argc, char **argv) {
    * main thread waits for. */
   ss_gsl_quiet();
   json_object_seed(0);
-  /* One malloc arena for every thread: an answer is made on a worker and
-   * freed on the I/O thread, and with an arena per thread (glibc makes up
-   * to 8 per core) each one kept its own high-water mark of them: 1000
-   * clients that did not read their /batch answers peaked at 170 MB of
-   * RSS, 135 MB with one arena (bench/rss.py).  The small blocks a request
-   * makes and frees come from each thread's cache, without the arena's
-   * lock. */
-  mallopt(M_ARENA_MAX, 1);
+  /* Four malloc arenas, not glibc's 8 a core: an answer is made on a
+   * worker and freed on the I/O thread, and each arena keeps its own
+   * high-water mark of them (1000 clients that did not read their /batch
+   * answers peaked at 170 MB of RSS with the default arenas; bench/rss.py).
+   * One arena peaked lowest (135 MB then, 199-210 MB in a later run against
+   * 212-228 MB with four), but every thread then took its one lock for any
+   * block over the thread cache, the answers' text and GSL's solvers
+   * included: a /batch item of /orbit from a guess cost 68-72 us of daemon
+   * CPU with one arena, 44-48 us with four, and /health waited on the lock
+   * behind the workers.  malloc_trim gives every arena's free pages back
+   * (monitor.c). */
+  mallopt(M_ARENA_MAX, 4);
   signal(SIGPIPE, SIG_IGN);
   sigset_t set;
   sigemptyset(&set);
