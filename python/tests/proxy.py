@@ -4,7 +4,32 @@ from __future__ import annotations
 
 import socket
 import threading
-from typing import List
+from typing import Callable, List, Tuple
+
+
+def listen(serve: Callable[[socket.socket], None]
+           ) -> Tuple[socket.socket, str]:
+    """A listening socket on a free loopback port and its URL, with
+    ``serve(socket)`` run on a thread of its own to accept from it."""
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    sock.listen(8)
+    threading.Thread(target=serve, args=(sock,), daemon=True).start()
+    return sock, "http://127.0.0.1:%d" % sock.getsockname()[1]
+
+
+def read_request(conn: socket.socket) -> Tuple[bytes, bytes]:
+    """One request read whole from ``conn``: its head, and its body of
+    the head's Content-Length."""
+    req = b""
+    while b"\r\n\r\n" not in req:
+        req += conn.recv(65536)
+    head, body = req.split(b"\r\n\r\n", 1)
+    sized = head.lower().split(b"content-length: ")
+    length = int(sized[1].split(b"\r\n")[0]) if len(sized) > 1 else 0
+    while len(body) < length:
+        body += conn.recv(65536)
+    return head, body
 
 
 class CuttingProxy:
@@ -21,28 +46,17 @@ class CuttingProxy:
         self.requests: List[bytes] = []
         self.heads: List[bytes] = []
         self._lock = threading.Lock()
-        self.sock = socket.socket()
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.listen(8)
-        self.url = "http://127.0.0.1:%d" % self.sock.getsockname()[1]
-        threading.Thread(target=self.serve, daemon=True).start()
+        self.sock, self.url = listen(self.serve)
 
-    def serve(self) -> None:
+    def serve(self, sock: socket.socket) -> None:
         while True:
-            conn, _ = self.sock.accept()
+            conn, _ = sock.accept()
             threading.Thread(target=self.one, args=(conn,),
                              daemon=True).start()
 
     def one(self, conn: socket.socket) -> None:
         up = socket.create_connection(self.target)
-        req = b""
-        while b"\r\n\r\n" not in req:
-            req += conn.recv(65536)
-        head, body = req.split(b"\r\n\r\n", 1)
-        sized = head.lower().split(b"content-length: ")
-        length = int(sized[1].split(b"\r\n")[0]) if len(sized) > 1 else 0
-        while len(body) < length:
-            body += conn.recv(65536)
+        head, body = read_request(conn)
         with self._lock:
             self.heads.append(head)
             ours = self.when in head

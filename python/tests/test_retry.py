@@ -7,7 +7,6 @@ network errors, retried on idempotent calls only."""
 from __future__ import annotations
 
 import json
-import re
 import socket
 import threading
 import time
@@ -18,6 +17,7 @@ import pytest
 import stickslip
 from conftest import PAPER, Daemon
 from fake import FakeServer
+from proxy import listen, read_request
 
 SLOW = {"params": PAPER, "state": {"v1": 0, "v2": 1},
         "axes": [{"variable": "x1", "from": -2, "to": 4, "n": 140},
@@ -142,22 +142,12 @@ class Hangup:
 
     def __init__(self) -> None:
         self.requests = 0
-        self.sock = socket.socket()
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.listen(8)
-        self.url = "http://127.0.0.1:%d" % self.sock.getsockname()[1]
-        threading.Thread(target=self.serve, daemon=True).start()
+        self.sock, self.url = listen(self.serve)
 
-    def serve(self) -> None:
+    def serve(self, sock: socket.socket) -> None:
         while True:
-            conn, _ = self.sock.accept()
-            got = b""
-            while b"\r\n\r\n" not in got:
-                got += conn.recv(65536)
-            head, body = got.split(b"\r\n\r\n", 1)
-            m = re.search(rb"(?i)content-length: *(\d+)", head)
-            while m and len(body) < int(m.group(1)):
-                body += conn.recv(65536)
+            conn, _ = sock.accept()
+            read_request(conn)
             self.requests += 1
             conn.close()
 

@@ -11,7 +11,7 @@ import threading
 
 import stickslip
 from conftest import PAPER, Daemon
-from proxy import CuttingProxy
+from proxy import CuttingProxy, listen, read_request
 
 
 def test_batch_cut_resumed(daemon: Daemon) -> None:
@@ -57,17 +57,11 @@ class Trickle:
         self.go = threading.Event()
         self.held = False
         self.first, self.rest = first, rest
-        self.sock = socket.socket()
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.listen(4)
-        self.url = "http://127.0.0.1:%d" % self.sock.getsockname()[1]
-        threading.Thread(target=self.serve, daemon=True).start()
+        self.sock, self.url = listen(self.serve)
 
-    def serve(self) -> None:
-        conn, _ = self.sock.accept()
-        got = b""
-        while b"\r\n\r\n" not in got:
-            got += conn.recv(65536)
+    def serve(self, sock: socket.socket) -> None:
+        conn, _ = sock.accept()
+        read_request(conn)
 
         def chunk(data: bytes) -> bytes:
             return b"%x\r\n%s\r\n" % (len(data), data)
