@@ -371,7 +371,9 @@ static int items_of_text(const char *body, size_t len, const api_call *c,
   int comma = 0; /* the last thing read was a comma */
   for (p = skip_ws(p + 1, end); p < end && *p != ']';) {
     api_scan_top top;
-    const char *q = api__json_scan(p, end, c->lim->max_depth - 2, &top);
+    /* counting needs only where each item ends */
+    const char *q =
+        b ? api__json_scan(p, end, c->lim->max_depth - 2, &top) : NULL;
     int scanned = q != NULL;
     if (!q && (!(q = value_end(p, end, &depth)) || q == p ||
                depth + 2 > c->lim->max_depth))
