@@ -12,18 +12,23 @@
  * time (RUN_SLICE), writes a range's lines into the batch's buffer of lines
  * at once, and goes back to the end of its client's queue, so that the
  * client's other requests, and other clients, get their turn between runs
- * as they would between requests; the I/O thread is woken at most twice
- * per run (for its first line, and at its end), not once per item.  An item
- * costs about 10 us of computing: a hand-off to the pool and back for each (two
- * thread wake-ups, a job, a stream) cost ten times that.  The buffer holds at
- * most BATCH_BUFFER bytes of lines not yet written (a runner takes no item
- * beyond that; the lines being written restart the runners), so a batch holds
+ * as they would between requests.  The I/O thread is woken for a run's
+ * first lines, when BATCH_WAKE bytes of lines are ready, and at the run's
+ * end, not once per item.  An item costs about 10 us of
+ * computing: a hand-off to the pool and back for each (two thread wake-ups,
+ * a job, a stream) cost ten times that.  The buffer holds at most
+ * BATCH_BUFFER bytes of lines not yet written (a runner takes no item beyond
+ * that; the lines being written restart the runners), so a batch holds
  * little whatever its client reads.  When no line is ready the response's
- * reader suspends the connection, and the end of the next run resumes it.  The
- * reader never waits for a runner's hold of the batch: a runner descheduled
- * while it holds it would stop the I/O thread, and every connection, for a
- * time slice (batch_read).  When the client goes away the runners that wait
- * are dropped and the one that runs is told to stop, as for any request.
+ * reader suspends the connection, and a runner resumes it.  The reader
+ * never waits for a runner's hold of the batch: a runner descheduled while
+ * it holds it would stop the I/O thread, and every connection, for a time
+ * slice (batch_read).  So a runner resumes the connection only once it has
+ * let go of the batch: the I/O thread it wakes may take its processor at
+ * once, and, finding the batch held, would suspend again, to be resumed
+ * again (on 2 cores that ping-pong cost 3 context switches an item).  When
+ * the client goes away the runners that wait are dropped and the one that
+ * runs is told to stop, as for any request.
  */
 #include <pthread.h>
 #include <stdio.h>
@@ -41,10 +46,14 @@
 /* The most items a run claims at once: its lines are put in the batch's
  * buffer together, and the batch held once for them. */
 #define RUN_RANGE 16
-/* Lines not yet written that stop the runners: a stream chunk, what the
- * response's reader takes at a time (of a client that does not read, the
- * batch then holds about this much, not answers). */
-#define BATCH_BUFFER SRV__STREAM_CHUNK
+/* Lines not yet written that stop the runners: four stream chunks (of a
+ * client that does not read, the batch then holds about this much, not
+ * answers; with one chunk, runners stopped and were restarted every 16
+ * lines of 2 KB). */
+#define BATCH_BUFFER (4 * SRV__STREAM_CHUNK)
+/* Lines ready that wake the I/O thread in the middle of a run: what the
+ * response's reader takes at a time. */
+#define BATCH_WAKE SRV__STREAM_CHUNK
 
 typedef struct runner {
   srv_job job; /* first: a job is its runner */
@@ -64,7 +73,10 @@ typedef struct sline {
 struct srv__batch {
   pthread_mutex_t mu;
   struct srv_daemon *d;
-  struct MHD_Connection *c; /* NULL once the request has completed */
+  /* NULL once the request has completed; set to NULL under both locks,
+   * resumed under cmu alone (batch_resume) */
+  struct MHD_Connection *c;
+  pthread_mutex_t cmu;
   api_batch *ab;
   char key[SRV_CLIENT_KEY];
   atomic_int fd;   /* of the connection; -1 once it has completed */
@@ -119,6 +131,7 @@ static void batch_free(srv__batch *b) {
   free(b->last);
   api_batch_free(b->ab);
   srv__held(b->d, b->key, -b->held);
+  pthread_mutex_destroy(&b->cmu);
   pthread_mutex_destroy(&b->mu);
   free(b);
 }
@@ -251,17 +264,32 @@ static int claim(srv__batch *b, runner *ru, size_t most, size_t *i, size_t *n) {
   return rc;
 }
 
+/* The connection, suspended until lines are ready, resumed by a runner
+ * that does not hold b->mu: the I/O thread it wakes may take the runner's
+ * processor at once, and would find b->mu still held (batch_read).  cmu
+ * keeps the connection from completing in between (srv__batch_detach). */
+static void batch_resume(srv__batch *b) {
+  pthread_mutex_lock(&b->cmu);
+  if (b->c)
+    MHD_resume_connection(b->c);
+  pthread_mutex_unlock(&b->cmu);
+}
+
 /* b->mu let go by a runner, which holds a reference to the batch: the
- * reader, if it found the lock taken (batch_read), resumed.  The flag is
- * read after the lock is let go, so that a reader that sets it after a
- * runner's last look finds the lock free on its second try. */
+ * reader, if it found the lock taken (batch_read), resumed, once the lock
+ * is let go.  The flag is read after the lock is let go, so that a reader
+ * that sets it after a runner's last look finds the lock free on its
+ * second try. */
 static void runner_unlock(srv__batch *b) {
   pthread_mutex_unlock(&b->mu);
   while (atomic_load(&b->kick)) {
+    int resume = 0;
     pthread_mutex_lock(&b->mu);
     if (atomic_exchange(&b->kick, 0) && b->c)
-      MHD_resume_connection(b->c);
+      resume = 1;
     pthread_mutex_unlock(&b->mu);
+    if (resume)
+      batch_resume(b);
   }
 }
 
@@ -320,20 +348,25 @@ static void runner_run(srv_job *j) {
     for (size_t k = 0; k < n; k++)
       line_made(b, i + k, it[k].status, put < 0 ? -1 : it[k].rc, it[k].s,
                 it[k].held);
-    if (!woke && b->waiting && b->c) {
-      /* the first line of the run goes out while the next items compute
-       * (which may be long); the others at the run's end */
+    size_t pending = b->out_len - b->out_off;
+    int wake = 0;
+    if (b->waiting && b->c && (pending >= BATCH_WAKE || !woke)) {
+      /* the first lines of the run go out while the next items compute
+       * (which may be long), the others when there are enough of them to
+       * be worth a wake-up of the I/O thread, or at the run's end */
       b->waiting = 0;
       woke = 1;
-      MHD_resume_connection(b->c);
+      wake = 1;
     }
     /* no more lines, at the range's pace, than the buffer has room for */
-    size_t line = ru->len / n, pending = b->out_len - b->out_off;
+    size_t line = ru->len / n;
     if (line && pending < BATCH_BUFFER &&
         most > (BATCH_BUFFER - pending) / line)
       most = (BATCH_BUFFER - pending) / line + 1;
     what = most ? claim(b, ru, most, &i, &n) : 0;
     runner_unlock(b);
+    if (wake)
+      batch_resume(b);
     if (ru->cap > BATCH_BUFFER) { /* a large line: its room not kept */
       free(ru->text);
       ru->text = NULL;
@@ -362,11 +395,12 @@ static void runner_done(srv_job *j) {
                    "later");
     dispatch(b);
   }
-  if (b->waiting && b->c) {
+  int resume = b->waiting && b->c;
+  if (resume)
     b->waiting = 0;
-    MHD_resume_connection(b->c);
-  }
   runner_unlock(b);
+  if (resume)
+    batch_resume(b);
   /* the runner's reference, dropped without the lock, which the reader
    * may be trying for */
   if (atomic_fetch_sub(&b->refs, 1) == 1)
@@ -583,7 +617,9 @@ size_t srv__batch_detach(srv__batch *b) {
   pthread_mutex_lock(&b->mu);
   atomic_store(&b->gone, 1);
   atomic_store(&b->fd, -1);
+  pthread_mutex_lock(&b->cmu);
   b->c = NULL;
+  pthread_mutex_unlock(&b->cmu);
   size_t sent = b->sent;
   pthread_mutex_unlock(&b->mu);
   return sent;
@@ -611,6 +647,7 @@ enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
                              0, NULL);
   }
   pthread_mutex_init(&b->mu, NULL);
+  pthread_mutex_init(&b->cmu, NULL);
   b->d = d;
   b->c = c;
   b->ab = ab;
@@ -620,6 +657,7 @@ enum MHD_Result srv__batch_start(struct srv_daemon *d, struct MHD_Connection *c,
   b->n_run =
       d->cfg.batch_parallel < b->n ? d->cfg.batch_parallel : (unsigned)b->n;
   if (!(b->run = calloc(b->n_run, sizeof *b->run))) {
+    pthread_mutex_destroy(&b->cmu);
     pthread_mutex_destroy(&b->mu);
     free(b);
     api_batch_free(ab);
