@@ -12,6 +12,7 @@
 #include "endpoints.h"
 #include "arena.h"
 #include "problem.h"
+#include "scan.h"
 #include "writer.h"
 
 typedef struct ep_row {
@@ -161,7 +162,9 @@ json_t *api__parse(const char *body, size_t len, const api_limits *lim,
               "the JSON nesting is deeper than %d levels", lim->max_depth);
     return NULL;
   }
-  root = json_loadb(body, len, JSON_REJECT_DUPLICATES, &jerr);
+  root = api__json_build(body, body + len, lim->max_depth + 1);
+  if (!root)
+    root = json_loadb(body, len, JSON_REJECT_DUPLICATES, &jerr);
   if (!root) {
     api__fail(e, API_P_INVALID_JSON, NULL,
               "the body is not valid JSON: %s (line %d, column %d)", jerr.text,

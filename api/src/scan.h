@@ -5,6 +5,7 @@
 #ifndef SS_API_SCAN_H
 #define SS_API_SCAN_H
 
+#include <jansson.h>
 #include <stddef.h>
 
 /* A member of the object scanned: its key's text (without the quotes) and
@@ -32,5 +33,14 @@ typedef struct api_scan_top {
  * the value if it is an object. */
 const char *api__json_scan(const char *p, const char *end, int depth,
                            api_scan_top *top);
+
+/* The tree of the JSON object or array in @a p .. @a end (whitespace
+ * around it), nested at most @a depth deep, built straight from the text
+ * when api__json_scan vouches for it: the values json_loadb reads from it
+ * with JSON_REJECT_DUPLICATES, in the same order, made with the same
+ * allocator, without jansson's lexer (a third of an /orbit body's parse).
+ * NULL for anything else, valid or not, or when out of memory: the caller
+ * parses with jansson, whose problem stands. */
+json_t *api__json_build(const char *p, const char *end, int depth);
 
 #endif
