@@ -235,7 +235,7 @@ int ep_map_decode(const json_t *root, const api_call *c, void **xp) {
   x->kind = 3; /* all */
   x->max_period = 4;
   x->effort = 2;
-  x->search_every = 8;
+  x->search_every = 1;
   x->edge_search = 1;
   if (api__decode_request(&SPEC, root, x, &x->ap, c))
     return -1;
@@ -304,9 +304,10 @@ static const ss_params *params_of(const map_x *x) {
 static int map_problem(int rc, const ss_diag *d, const api_call *c) {
   if (rc == SS_ELIMIT_TIME)
     return api__status_limit(c->e, rc, "max_seconds", c->lim->max_seconds, "",
-                             "the map needed more than %g s; make it "
-                             "smaller or coarser, or search less "
-                             "(search_every, edge_search, effort)",
+                             "the map needed more than %g s; run it as a "
+                             "job (Prefer: respond-async), make it smaller "
+                             "or coarser, or search less (search_every, "
+                             "edge_search, effort)",
                              c->lim->max_seconds);
   if (rc == SS_EDOMAIN)
     /* a cell out of the parameters' ranges */

@@ -1337,7 +1337,8 @@ typedef struct ss_map_opts {
    *  between which a family the map holds passes a multiplier through +1,
    *  -1 or the unit circle, and, when search_every is 1, everywhere (the
    *  map then holds in every cell every orbit its search finds; see
-   *  no_edge_search).  0: 8. */
+   *  no_edge_search).  0: 1, every cell: a sparser lattice is faster and may
+   *  lack an orbit the search finds at a cell it did not search. */
   int search_every;
   int max_orbits; /**< per cell (0: 16) */
   int threads;    /**< the full searches run on this many threads (0: 1) */

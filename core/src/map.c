@@ -1,9 +1,19 @@
 /*
  * map.c: the periodic orbits over a grid of one or two parameters.
  *
- * A full search (ss_orbit_find) costs milliseconds; a solve from a guess
- * tens of microseconds.  So the full search runs on a lattice of cells
- * (spread evenly along each axis, at most search_every apart), and every orbit
+ * By default (search_every 1) the full search (ss_orbit_find with the map's
+ * kinds, max_period and effort) runs at every cell, so a map holds in each
+ * cell every orbit that search finds there: no rule that decides from a
+ * cell's neighbours where to search found every orbit (below; the measured
+ * rules are in docs/api/map.md), for an island may be born in a cell whose
+ * neighbours hold no orbit of the map's kinds, and nothing there tells of
+ * it.  Continuation then adds the orbits of families it carries into cells
+ * whose own search missed them.
+ *
+ * A full search costs milliseconds; a solve from a guess tens of
+ * microseconds.  So a map may instead run the full search on a lattice of
+ * cells (search_every > 1: spread evenly along each axis, at most
+ * search_every apart), and every orbit
  * found anywhere is then continued into each neighbouring cell as a guess
  * (ss_orbit_find from a guess: solved, checked feasible, a repetition of a
  * shorter orbit reduced to it).  A cell that gains an orbit puts its
@@ -60,7 +70,7 @@
 #include "params.h"
 #include "search.h"
 
-#define MAP_SEARCH_EVERY 8
+#define MAP_SEARCH_EVERY 1
 #define MAP_MAX_ORBITS 16
 #define MAP_MAX_CELLS (1 << 24)
 #define MAP_MAX_THREADS 64

@@ -3,7 +3,9 @@
  *
  * The n x n existence map of the overshoot orbits of test_existence (ur/us
  * 1.5-15 and chi 0.04-0.96, eta = 4, us = 0.0724, V = 1) is made by
- * ss_map_run with its defaults, and every cell is searched on its own by
+ * ss_map_run on a lattice sparser than the grid (search_every 4, or 3 for a
+ * small grid: the default searches every cell), and every cell is searched
+ * on its own by
  * ss_orbit_find (what n^2 separate /orbit requests do):
  *  - every orbit the separate searches find is in the map's cell;
  *  - no hole: every orbit of a cell's neighbour, given as a guess at the
@@ -11,7 +13,8 @@
  *  - every orbit of the map closes: the Poincare map by simulation from its
  *    start returns to it within 1e-8 after its turns;
  *  - a complete cell holds what the search alone finds there, no fewer;
- * and on a 1-D sweep: search_every = 1 makes every cell complete; the time
+ * and on a 1-D sweep: search_every = 1, the default, makes every cell
+ * complete; the lattice of search_every 8 is spread evenly; the time
  * budget and the cancel hook stop a map; axes and parameters out of range
  * are refused; a physical map equals the dimensionless one.
  * Usage: test_map [n]   (default 12; SS_MAP_N overrides)
@@ -224,6 +227,29 @@ static void test_threads(void) {
   ss_map_free(&b);
 }
 
+/* EVIDENCE: README "POST /map": by default (search_every 0 here, 1 in the
+ * API) the full search runs at every cell, so every cell is complete, on a
+ * sweep where no orbit exists as on one where a family lives (ur across the
+ * overshoot family's grazing). */
+static void test_default_every_cell(void) {
+  ss_params base = {0.2, 4, 0.0724, 0.6178, 1};
+  ss_map_axis ax = {SS_PARAM_UR, 0.3, 0.8, 21};
+  ss_map_opts mo;
+  memset(&mo, 0, sizeof mo);
+  mo.kinds = SS_ORBIT_OVERSHOOT;
+  ss_map map;
+  ASSERT_EQ_INT(ss_map_run(&base, 1, &ax, &mo, &map, NULL), SS_OK);
+  int complete = 0, with = 0;
+  for (int c = 0; c < map.n_cells; c++) {
+    complete += map.cells[c].complete;
+    with += map.cells[c].n_orbits > 0;
+  }
+  ASSERT_EQ_INT(map.searches, 21);
+  ASSERT_EQ_INT(complete, 21);
+  ASSERT_TRUE(with > 0 && with < 21); /* both kinds of cell were searched */
+  ss_map_free(&map);
+}
+
 /* EVIDENCE: README "POST /map": the lattice of full searches is spread
  * evenly from the first cell to the last, at most search_every apart: on a
  * sweep where no orbit exists (ur below the overshoot family's grazing, so
@@ -234,6 +260,7 @@ static void test_lattice(void) {
   ss_map_opts mo;
   memset(&mo, 0, sizeof mo);
   mo.kinds = SS_ORBIT_OVERSHOOT;
+  mo.search_every = 8;
   ss_map map;
   ASSERT_EQ_INT(ss_map_run(&base, 1, &ax, &mo, &map, NULL), SS_OK);
   static const int want[] = {0, 7, 14, 21, 28, 35, 42, 49};
@@ -288,6 +315,7 @@ static void test_edges(void) {
   ss_map_opts mo;
   memset(&mo, 0, sizeof mo);
   mo.kinds = SS_ORBIT_OVERSHOOT;
+  mo.search_every = 8;
   mo.threads = 2;
   ss_map map;
   ASSERT_EQ_INT(ss_map_run(&base, 2, ax, &mo, &map, NULL), SS_OK);
@@ -323,6 +351,7 @@ int main(int argc, char **argv) {
   const char *env = getenv("SS_MAP_N");
   int N = env ? atoi(env) : argc > 1 ? atoi(argv[1]) : 12;
   test_sweep();
+  test_default_every_cell();
   test_lattice();
   test_edges();
   test_threads();

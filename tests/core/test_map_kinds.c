@@ -2,9 +2,10 @@
  * test_map_kinds.c: maps of every kind, cell by cell, against the separate
  * search at each cell.
  *
- * EVIDENCE: README "Maps" — a map holds, in every cell, what /orbit with
- * the map's kind, max_period and effort finds there, wherever the family
- * of that orbit reaches a cell the map holds it in.
+ * EVIDENCE: README "Maps" — by default a map holds, in every cell, every
+ * orbit /orbit with the map's kind, max_period and effort finds there; with
+ * search_every 8 it holds it wherever the family of that orbit reaches a
+ * cell the map holds it in.
  *
  * The battery: eight maps, two of each kind (stick-slip, overshoot, other,
  * all), each over one of four parameter planes (chi-eta, us-ur, eta-ur,
@@ -12,9 +13,11 @@
  * (xorshift64, seed 20261127: the draw is the same on every run, and was
  * not chosen by looking at the maps).  Each map is n x n cells (default 12;
  * SS_MAP_N overrides, smaller under the sanitizers), made by ss_map_run
- * with its defaults, and every cell is searched on its own by
- * ss_orbit_find with the map's kinds, max_period and effort (what n^2
- * separate /orbit requests do).  At every cell:
+ * with its defaults and again with search_every 8, and every cell is
+ * searched on its own by ss_orbit_find with the map's kinds, max_period
+ * and effort (what n^2 separate /orbit requests do).  With the defaults
+ * every cell is complete and holds every orbit the separate search finds,
+ * and has no hole (below).  With search_every 8, at every cell:
  *  - no hole: every orbit of a neighbour's cell, solved at the cell from its
  *    durations (what /orbit does with it as a guess), gives no feasible
  *    orbit or one the cell holds;
@@ -24,15 +27,12 @@
  *    reaches it; only a search at the cell itself finds it), and no family
  *    the map holds bifurcates between the cell and a neighbour (a
  *    multiplier through +1, -1 or the unit circle: the map searches there).
- *    Islands are listed, and are at most 1 % of the orbits of the battery;
- *    the first map with one is made again with search_every 1 (every cell
- *    searched), which must hold every orbit of every cell (a small map of
- *    the reproducer's plane when no map has one).
+ *    Islands are listed, and are at most 1 % of the orbits of the battery.
  * And the reproducer of a hole: the 30 x 30 stick-slip map in chi and eta
- * at us 0.1, ur 0.6; its cell chi 0.1724137931034483, eta 0.5 holds the
- * stable orbit of durations [18.05922, 6.75598], which the neighbour's
- * orbit, solved there, gives (the orbit the cell had continued into that
- * neighbour, where it jumped to another family: solved back, it is not the
+ * at us 0.1, ur 0.6, with search_every 8; its cell chi 0.1724137931034483, eta
+ * 0.5 holds the stable orbit of durations [18.05922, 6.75598], which the
+ * neighbour's orbit, solved there, gives (the orbit the cell had continued into
+ * that neighbour, where it jumped to another family: solved back, it is not the
  * one the cell had); and its cells (14, 2), (17, 3), (18, 4) hold the
  * islands that families passing a multiplier through -1 or the unit
  * circle beside them give birth to.
@@ -62,7 +62,6 @@ static double draw(double a, double b) {
 
 typedef struct tally {
   int orbits, missing, islands, holes;
-  int every_cell; /* maps made again with search_every 1 */
 } tally;
 
 /* The cell of @a map at (i, j), or -1 outside. */
@@ -125,14 +124,44 @@ static int bifurcates_near(const ss_map *map, int c) {
   return 0;
 }
 
-/* The cell c of @a map against the separate search with @a oo. */
+/* Holes at cell c of @a map (model @a m): every orbit of a neighbour's
+ * cell, solved at c from its durations, gives no feasible orbit of the
+ * map's kinds or one the cell holds. */
+static void check_holes(const ss_map *map, int c, const ss_model *m,
+                        const ss_orbit_opts *oo, tally *t) {
+  int n1 = map->axes[1].n, i = c / n1, j = c % n1;
+  for (int di = -1; di <= 1; di++)
+    for (int dj = -1; dj <= 1; dj++) {
+      int b = cell_at(map, i + di, j + dj);
+      if ((!di && !dj) || b < 0)
+        continue;
+      for (int k = 0; k < map->cells[b].n_orbits; k++) {
+        const ss_map_orbit *q = &map->cells[b].orbits[k];
+        ss_orbit o;
+        if (from_guess(m, q->n_phases, q->modes, q->durations, &o) &&
+            (oo->kinds & o.kind) && o.n_turns <= 4 &&
+            !holds(&map->cells[c], o.n_phases, o.modes, o.durations,
+                   o.period)) {
+          t->holes++;
+          printf("  HOLE: cell (%d, %d): the orbit of period %.6f of its "
+                 "neighbour (%+d, %+d) gives one it lacks, period %.6f\n",
+                 i, j, q->period, di, dj, o.period);
+        }
+      }
+    }
+}
+
+/* The cell c of @a map against the separate search with @a oo, into @a t;
+ * and, when @a full is not NULL, of @a full against the same search, into
+ * @a tf, every orbit it lacks counted as missing. */
 static void check_cell(const ss_params *base, const ss_map *map, int c,
-                       const ss_orbit_opts *oo, tally *t) {
+                       const ss_orbit_opts *oo, tally *t, const ss_map *full,
+                       tally *tf) {
   ss_model m;
   ss_orbit out[MAXO];
   int lacking = 0, n1 = map->axes[1].n, i = c / n1, j = c % n1;
-  const ss_map_cell *ce = &map->cells[c];
-  t->orbits += search_cell(base, NULL, map, c, oo, &m, out, MAXO, &lacking);
+  int n = search_cell(base, NULL, map, c, oo, &m, out, MAXO, &lacking);
+  t->orbits += n;
   for (int k = 0; k < lacking; k++) {
     const ss_orbit *o = &out[k];
     /* an island where a family of the map bifurcates is missing: the map
@@ -148,55 +177,19 @@ static void check_cell(const ss_params *base, const ss_map *map, int c,
            o->stab.stable ? "stable" : "unstable", o->period, o->durations[0],
            o->durations[1]);
   }
-  for (int di = -1; di <= 1; di++)
-    for (int dj = -1; dj <= 1; dj++) {
-      int b = cell_at(map, i + di, j + dj);
-      if ((!di && !dj) || b < 0)
-        continue;
-      for (int k = 0; k < map->cells[b].n_orbits; k++) {
-        const ss_map_orbit *q = &map->cells[b].orbits[k];
-        ss_orbit o;
-        if (from_guess(&m, q->n_phases, q->modes, q->durations, &o) &&
-            (oo->kinds & o.kind) && o.n_turns <= 4 &&
-            !holds(ce, o.n_phases, o.modes, o.durations, o.period)) {
-          t->holes++;
-          printf("  HOLE: cell (%d, %d): the orbit of period %.6f of its "
-                 "neighbour (%+d, %+d) gives one it lacks, period %.6f\n",
-                 i, j, q->period, di, dj, o.period);
-        }
-      }
+  check_holes(map, c, &m, oo, t);
+  if (!full)
+    return;
+  tf->orbits += n;
+  for (int k = 0; k < n; k++)
+    if (!holds(&full->cells[c], out[k].n_phases, out[k].modes, out[k].durations,
+               out[k].period)) {
+      tf->missing++;
+      printf("  MISSING: cell (%d, %d) of the default map lacks the orbit of "
+             "period %.6f\n",
+             i, j, out[k].period);
     }
-}
-
-/* EVIDENCE: README "Maps" — with search_every 1 the full search runs at
- * every cell, so the map holds every orbit the separate search finds: the
- * map of @a ax around @a base again so, every cell complete, nothing
- * missing and no island. */
-static void check_every_cell(const ss_params *base, const ss_map_axis *ax,
-                             unsigned kinds, tally *all) {
-  ss_map_opts mo;
-  memset(&mo, 0, sizeof mo);
-  mo.kinds = kinds;
-  mo.search_every = 1;
-  ss_map map;
-  ss_diag d;
-  ASSERT_EQ_INT(ss_map_run(base, 2, ax, &mo, &map, &d), SS_OK);
-  ss_orbit_opts oo;
-  memset(&oo, 0, sizeof oo);
-  oo.kinds = kinds;
-  tally t = {0, 0, 0, 0, 0};
-  int complete = 0;
-  for (int c = 0; c < map.n_cells; c++) {
-    complete += map.cells[c].complete;
-    check_cell(base, &map, c, &oo, &t);
-  }
-  printf("  search_every 1: %d searches, %d complete cells; %d orbits: %d "
-         "missing, %d islands, %d holes\n",
-         map.searches, complete, t.orbits, t.missing, t.islands, t.holes);
-  ASSERT_EQ_INT(complete, map.n_cells);
-  ASSERT_EQ_INT(t.missing + t.islands + t.holes, 0);
-  all->every_cell++;
-  ss_map_free(&map);
+  check_holes(full, c, &m, oo, tf);
 }
 
 typedef struct plane {
@@ -229,32 +222,43 @@ static void check_map(const char *kind, unsigned kinds, const plane *pl, int N,
       lo = base.us * 1.3, hi = base.us * 12;
     ax[a] = (ss_map_axis){q, lo, hi, N};
   }
+  /* the default (every cell searched), and the sketch of search_every 8 */
   ss_map_opts mo;
   memset(&mo, 0, sizeof mo);
   mo.kinds = kinds;
-  ss_map map;
+  ss_map map, sketch;
   ss_diag d;
   ASSERT_EQ_INT(ss_map_run(&base, 2, ax, &mo, &map, &d), SS_OK);
+  mo.search_every = 8;
+  ASSERT_EQ_INT(ss_map_run(&base, 2, ax, &mo, &sketch, &d), SS_OK);
   ss_orbit_opts oo;
   memset(&oo, 0, sizeof oo);
   oo.kinds = kinds; /* the map's max_period (4) and effort (2) by default */
-  tally t = {0, 0, 0, 0, 0};
+  tally t = {0, 0, 0, 0}, ts = {0, 0, 0, 0};
+  int complete = 0;
   printf("%-10s %-6s chi %.4f eta %.4f us %.4f ur %.4f: %d searches, %d "
-         "solves\n",
+         "solves; search_every 8: %d searches, %d solves\n",
          kind, pl->name, base.chi, base.eta, base.us, base.ur, map.searches,
-         map.solves);
-  for (int c = 0; c < map.n_cells; c++)
-    check_cell(&base, &map, c, &oo, &t);
-  printf("  %d orbits by separate searches: %d missing, %d islands, %d "
+         map.solves, sketch.searches, sketch.solves);
+  for (int c = 0; c < map.n_cells; c++) {
+    complete += map.cells[c].complete;
+    check_cell(&base, &sketch, c, &oo, &ts, &map, &t);
+  }
+  printf("  %d orbits by separate searches: the default map lacks %d "
+         "(%d islands), %d holes; search_every 8 lacks %d (%d islands), %d "
          "holes\n",
-         t.orbits, t.missing, t.islands, t.holes);
-  ASSERT_EQ_INT(t.missing, 0);
-  ASSERT_EQ_INT(t.holes, 0);
-  all->orbits += t.orbits;
-  all->islands += t.islands;
+         t.orbits, t.missing + t.islands, t.islands, t.holes,
+         ts.missing + ts.islands, ts.islands, ts.holes);
+  /* the default holds every orbit of every cell */
+  ASSERT_EQ_INT(complete, map.n_cells);
+  ASSERT_EQ_INT(t.missing + t.islands + t.holes, 0);
+  /* the sketch: nothing missing but islands, no hole */
+  ASSERT_EQ_INT(ts.missing, 0);
+  ASSERT_EQ_INT(ts.holes, 0);
+  all->orbits += ts.orbits;
+  all->islands += ts.islands;
   ss_map_free(&map);
-  if (t.islands > 0 && all->every_cell == 0)
-    check_every_cell(&base, ax, kinds, all);
+  ss_map_free(&sketch);
 }
 
 /* The reproducer: the stable orbit [18.05922, 6.75598] at cell (3, 0). */
@@ -265,6 +269,7 @@ static void check_reproducer(void) {
   ss_map_opts mo;
   memset(&mo, 0, sizeof mo);
   mo.kinds = SS_ORBIT_STICKSLIP;
+  mo.search_every = 8; /* the sketch: the default searches every cell */
   ss_map map;
   ss_diag d;
   ASSERT_EQ_INT(ss_map_run(&base, 2, ax, &mo, &map, &d), SS_OK);
@@ -288,9 +293,10 @@ static void check_reproducer(void) {
   ss_orbit_opts oo;
   memset(&oo, 0, sizeof oo);
   oo.kinds = SS_ORBIT_STICKSLIP;
-  tally t = {0, 0, 0, 0, 0};
+  tally t = {0, 0, 0, 0};
   for (int k = 0; k < 4; k++)
-    check_cell(&base, &map, cell_at(&map, CELLS[k][0], CELLS[k][1]), &oo, &t);
+    check_cell(&base, &map, cell_at(&map, CELLS[k][0], CELLS[k][1]), &oo, &t,
+               NULL, NULL);
   ASSERT_EQ_INT(t.missing + t.islands, 0);
   ASSERT_EQ_INT(t.holes, 0);
   ss_map_free(&map);
@@ -314,22 +320,15 @@ int main(int argc, char **argv) {
                {"overshoot", SS_ORBIT_OVERSHOOT},
                {"other", SS_ORBIT_OTHER},
                {"all", SS_ORBIT_ALL}};
-  tally all = {0, 0, 0, 0, 0};
+  tally all = {0, 0, 0, 0};
   check_reproducer();
   for (int k = 0; k < 4; k++)
     for (int r = 0; r < 2; r++)
       check_map(KINDS[k].name, KINDS[k].kinds, &PLANES[(k + 2 * r) % 4], N,
                 &all);
-  printf("battery: %d orbits, %d islands; %d maps again with search_every "
-         "1\n",
-         all.orbits, all.islands, all.every_cell);
+  printf("battery: %d orbits; search_every 8 lacks %d islands\n", all.orbits,
+         all.islands);
   ASSERT_TRUE(all.orbits > 0);
-  if (all.every_cell == 0) { /* no island: search_every 1 on a small map */
-    ss_params base = {0.3, 2, 0.1, 0.6, 1};
-    ss_map_axis ax[2] = {{SS_PARAM_CHI, 0.1, 0.8, 8},
-                         {SS_PARAM_ETA, 0.5, 8, 8}};
-    check_every_cell(&base, ax, SS_ORBIT_STICKSLIP, &all);
-  }
   ASSERT_TRUE(100 * all.islands <= all.orbits);
   TEST_DONE();
 }
