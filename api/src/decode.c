@@ -54,30 +54,35 @@ static void join(char *out, size_t n, const char *ptr, const char *key) {
   out[j] = 0;
 }
 
-/* A field is given when its key is there with a non-null value. */
-static const json_t *given(const json_t *obj, const char *name) {
-  const json_t *v = json_object_get(obj, name);
-  return v && !json_is_null(v) ? v : NULL;
-}
+/* The most fields an object's spec has: its values are found in one pass
+ * over the object's keys. */
+#define API_MAX_FIELDS 64
 
-static int unknown_keys(const api_spec *s, const json_t *obj, const char *ptr,
-                        api_err *e) {
+/* The value of each field of @a s in @a obj, NULL where its key is absent
+ * or its value null, into vals: one pass over the object's keys (a body
+ * gives a few of a spec's fields), each key refused when the spec has no
+ * such field (the message lists the known ones). */
+static int field_values(const api_spec *s, const json_t *obj, const char *ptr,
+                        const json_t **vals, api_err *e) {
   const char *key;
   json_t *v;
+  for (int i = 0; i < s->n; i++)
+    vals[i] = NULL;
   json_object_foreach((json_t *)obj, key, v) {
-    int known = 0;
-    for (int i = 0; i < s->n && !known; i++)
-      known = strcmp(key, s->fields[i].name) == 0;
-    if (!known) {
+    int i = 0;
+    while (i < s->n && strcmp(key, s->fields[i].name) != 0)
+      i++;
+    if (i == s->n) {
       char p[160], list[256] = "";
       join(p, sizeof p, ptr, key);
-      for (int i = 0; i < s->n; i++) {
-        strncat(list, i ? ", " : "", sizeof list - strlen(list) - 1);
-        strncat(list, s->fields[i].name, sizeof list - strlen(list) - 1);
+      for (int k = 0; k < s->n; k++) {
+        strncat(list, k ? ", " : "", sizeof list - strlen(list) - 1);
+        strncat(list, s->fields[k].name, sizeof list - strlen(list) - 1);
       }
       return api__fail(e, API_P_UNKNOWN_FIELD, p,
                        "unknown field '%s'; the fields here are: %s", p, list);
     }
+    vals[i] = json_is_null(v) ? NULL : v;
   }
   return 0;
 }
@@ -96,8 +101,8 @@ static void alt_names(const api_spec *s, int g, int alt, const char *ptr,
 }
 
 /* Exactly one alternative of each group: chosen[g] is its number. */
-static int groups(const api_spec *s, const json_t *obj, const char *ptr,
-                  int chosen[8], api_err *e) {
+static int groups(const api_spec *s, const json_t *const *vals,
+                  const char *ptr, int chosen[8], api_err *e) {
   for (int g = 1; g < 8; g++) {
     int first_field = -1;
     char a[128], b[128], p[160];
@@ -108,7 +113,7 @@ static int groups(const api_spec *s, const json_t *obj, const char *ptr,
         continue;
       if (first_field < 0)
         first_field = i;
-      if (!given(obj, f->name))
+      if (!vals[i])
         continue;
       if (chosen[g] < 0) {
         chosen[g] = f->alt;
@@ -252,20 +257,28 @@ int api__decode(const api_spec *s, const json_t *obj, const char *ptr,
                 void *dest, const api_call *c) {
   int chosen[8];
   char *dst = dest;
-  if (unknown_keys(s, obj, ptr, c->e) || groups(s, obj, ptr, chosen, c->e))
+  const json_t *vals[API_MAX_FIELDS];
+  if (s->n > API_MAX_FIELDS)
+    return api__fail(c->e, API_P_INTERNAL, ptr, "%s has more than %d fields",
+                     ptr, API_MAX_FIELDS);
+  if (field_values(s, obj, ptr, vals, c->e) ||
+      groups(s, vals, ptr, chosen, c->e))
     return -1;
   for (int i = 0; i < s->n; i++) {
     const api_field *f = &s->fields[i];
-    const json_t *v = given(obj, f->name);
+    const json_t *v = vals[i];
     char p[160];
-    join(p, sizeof p, ptr, f->name);
     if (!v) {
       if ((f->flags & API_REQUIRED) &&
-          (f->group == 0 || chosen[f->group] == f->alt))
+          (f->group == 0 || chosen[f->group] == f->alt)) {
+        join(p, sizeof p, ptr, f->name);
         return api__fail(c->e, API_P_MISSING_FIELD, p,
                          "the required field %s is missing", p);
+      }
       continue;
     }
+    /* the field's pointer, for its problems and its members' */
+    join(p, sizeof p, ptr, f->name);
     if (field(f, v, p, dst, c))
       return -1;
     if (f->has)
