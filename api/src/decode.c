@@ -101,8 +101,8 @@ static void alt_names(const api_spec *s, int g, int alt, const char *ptr,
 }
 
 /* Exactly one alternative of each group: chosen[g] is its number. */
-static int groups(const api_spec *s, const json_t *const *vals,
-                  const char *ptr, int chosen[8], api_err *e) {
+static int groups(const api_spec *s, const json_t *const *vals, const char *ptr,
+                  int chosen[8], api_err *e) {
   for (int g = 1; g < 8; g++) {
     int first_field = -1;
     char a[128], b[128], p[160];
