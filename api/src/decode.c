@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "decode.h"
+#include "writer.h"
 #include "problem.h"
 #include "values.h"
 
@@ -294,20 +295,25 @@ int api__given(const api_spec *s, const void *dest, const char *name) {
   return 0;
 }
 
+/* Whether field @a f of the request at @a src is echoed: given, or
+ * defaulted, or required outside any alternative (so given, or the request
+ * would have been refused). */
+static int echoed(const api_field *f, const char *src) {
+  int was_given = f->has && *(const int *)(src + f->has - 1);
+  int always =
+      (f->flags & API_DEFAULT) || ((f->flags & API_REQUIRED) && f->group == 0);
+  return !(f->flags & API_ECHO_NEVER) && f->type != API_T_ANY &&
+         (was_given || always);
+}
+
 json_t *api__echo(const api_spec *s, const void *dest) {
   json_t *o = json_object();
   const char *src = dest;
   for (int i = 0; i < s->n; i++) {
     const api_field *f = &s->fields[i];
     const void *at = src + f->off;
-    int was_given = f->has && *(const int *)(src + f->has - 1);
     json_t *v = NULL;
-    /* a required field outside any alternative was given, or the request
-     * would have been refused */
-    int always = (f->flags & API_DEFAULT) ||
-                 ((f->flags & API_REQUIRED) && f->group == 0);
-    if ((f->flags & API_ECHO_NEVER) || f->type == API_T_ANY ||
-        !(was_given || always))
+    if (!echoed(f, src))
       continue;
     switch (f->type) {
     case API_T_NUMBER:
@@ -408,6 +414,89 @@ int api__params_resolve(api_params *ap, const api_call *c) {
     return api__from_diag(c->e, rc, &d,
                           ap->has_params ? "/params" : "/physical");
   return 0;
+}
+
+void api__w_echo(api_wbuf *w, const api_spec *s, const void *dest,
+                 const api_params *ap) {
+  const char *src = dest;
+  int first = 1;
+  api__w_put(w, "{", 1);
+  for (int i = 0; i < s->n; i++) {
+    const api_field *f = &s->fields[i];
+    const void *at = src + f->off;
+    if (!echoed(f, src))
+      continue;
+    if (!first)
+      api__w_put(w, ",", 1);
+    first = 0;
+    api__w_str(w, f->name, strlen(f->name));
+    api__w_put(w, ":", 1);
+    switch (f->type) {
+    case API_T_NUMBER:
+      api__w_real(w, *(const double *)at);
+      break;
+    case API_T_COUNT:
+      api__w_int(w, *(const long long *)at);
+      break;
+    case API_T_BOOL:
+      if (*(const int *)at)
+        API_W_LIT(w, "true");
+      else
+        API_W_LIT(w, "false");
+      break;
+    case API_T_ENUM: {
+      const char *e = ((const char *const *)f->aux)[*(const int *)at];
+      api__w_str(w, e, strlen(e));
+      break;
+    }
+    case API_T_VEC4:
+      for (int k = 0; k < 4; k++) {
+        api__w_put(w, k ? "," : "[", 1);
+        api__w_real(w, ((const double *)at)[k]);
+      }
+      api__w_put(w, "]", 1);
+      break;
+    case API_T_OBJECT:
+      api__w_echo(w, f->aux, at, NULL);
+      break;
+    case API_T_CUSTOM: {
+      json_t *v = ((const api_custom *)f->aux)->echo(at);
+      if (v)
+        api__w_json(w, v);
+      else
+        w->oom = 1;
+      json_decref(v);
+      break;
+    }
+    case API_T_ANY:
+      break;
+    }
+  }
+  if (ap) { /* api__params_echo's members */
+    if (!first)
+      api__w_put(w, ",", 1);
+    API_W_LIT(w, "\"params\":");
+    api__w_echo(w, &API_PARAMS_SPEC, &ap->p, NULL);
+    if (ap->has_physical) {
+      API_W_LIT(w, ",\"physical\":");
+      api__w_echo(w, &API_PHYSICAL_SPEC, &ap->ph, NULL);
+      API_W_LIT(w, ",\"omega\":");
+      api__w_real(w, ap->omega);
+    }
+  }
+  api__w_put(w, "}", 1);
+}
+
+int api__echo_as_tree;
+
+static void echo_item(api_wbuf *w, const api_lazy *l, size_t i) {
+  (void)i;
+  api__w_echo(w, l->aux, l->a, l->b);
+}
+
+json_t *api__echo_raw(const api_call *c, const api_spec *s, const void *dest,
+                      const api_params *ap) {
+  return api__raw_aux(c, echo_item, dest, ap, s);
 }
 
 void api__params_echo(json_t *in, const api_params *ap) {

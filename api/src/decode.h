@@ -194,6 +194,22 @@ int api__model(ss_model *m, const api_params *ap, const api_call *c);
  * request "physical" and "omega"; added to @a in. */
 void api__params_echo(json_t *in, const api_params *ap);
 
+/* api__echo, with (@a ap not NULL) the members api__params_echo adds,
+ * as a lazy value: its text written from @a dest when the answer is, the
+ * bytes api__echo's tree dumps to without the tree (a dozen objects and
+ * their keys for each answer).  @a dest and @a ap must live as long as the
+ * answer is being written (the endpoint's struct). */
+json_t *api__echo_raw(const api_call *c, const api_spec *spec, const void *dest,
+                      const api_params *ap);
+/* That text, written now to @a w. */
+struct api_wbuf;
+void api__w_echo(struct api_wbuf *w, const api_spec *spec, const void *dest,
+                 const api_params *ap);
+/* For tests: not 0 has the answers build their echo as a tree of values
+ * (api__echo and api__params_echo) and write that, the text the written
+ * echo must equal (tests/api/test_echo.c). */
+extern int api__echo_as_tree;
+
 /* ---- units: every conversion of a request goes through these ----------- */
 
 /* A time of the request in dimensionless time, and back. */

@@ -22,8 +22,12 @@ json_t *api__state(const api_params *ap, const double x[4]) {
 
 int api__answer(json_t *out, const api_spec *spec, const void *x,
                 const api_params *ap, const api_call *c, api_response *resp) {
-  json_t *in = api__echo(spec, x);
-  api__params_echo(in, ap);
+  json_t *in;
+  if (api__echo_as_tree) {
+    in = api__echo(spec, x);
+    api__params_echo(in, ap);
+  } else
+    in = api__echo_raw(c, spec, x, ap);
   api__set(out, "input", in);
   api__set(out, "units",
            json_string(ap->has_physical ? "physical" : "dimensionless"));
@@ -138,11 +142,13 @@ static void w_jacobian(api_wbuf *w, const double J[2][2],
   API_W_LIT(w, "]");
 }
 
+/* The note, as the JSON string it is written as (it has nothing to escape:
+ * no quote, backslash or control character). */
 static const char STAB_NOTE[] =
-    "Stability of the fixed point of the Poincare map on the section (4.2) "
+    "\"Stability of the fixed point of the Poincare map on the section (4.2) "
     "in (z1, z1'): all eigenvalues inside the unit circle means small "
     "perturbations, except during stick, stay near the orbit. This is "
-    "neither Lyapunov nor orbital stability (the paper, section 4).";
+    "neither Lyapunov nor orbital stability (the paper, section 4).\"";
 
 static void w_bool(api_wbuf *w, int v) {
   if (v)
@@ -182,7 +188,7 @@ static void stability_item(api_wbuf *w, const api_lazy *l, size_t i) {
     api__w_real(w, st->jac_diff);
   }
   API_W_LIT(w, ",\"note\":");
-  api__w_str(w, STAB_NOTE, sizeof STAB_NOTE - 1);
+  api__w_put(w, STAB_NOTE, sizeof STAB_NOTE - 1);
   if (l->k)
     API_W_LIT(w, "}");
 }

@@ -331,11 +331,6 @@ static int run_map(map_x *x, const api_call *c) {
 
 int ep_map_run(void *xp, const api_call *c) { return run_map(xp, c); }
 
-static void w_int(api_wbuf *w, long v) {
-  char num[32];
-  api__w_put(w, num, (size_t)snprintf(num, sizeof num, "%ld", v));
-}
-
 static void w_key(api_wbuf *w, int *first, const char *key) {
   if (!*first)
     API_W_LIT(w, ",");
@@ -360,7 +355,7 @@ static void w_orbit(api_wbuf *w, const ss_map_orbit *o, unsigned mask,
       break;
     }
     case F_N_TURNS:
-      w_int(w, o->n_turns);
+      api__w_int(w, o->n_turns);
       break;
     case F_PERIOD:
       api__w_real(w, o->period / omega);
@@ -394,7 +389,7 @@ static void w_orbit(api_wbuf *w, const ss_map_orbit *o, unsigned mask,
       api__w_real(w, o->min_margin.value);
       if (o->min_margin.phase >= 0) {
         API_W_LIT(w, ",\"phase\":");
-        w_int(w, o->min_margin.phase);
+        api__w_int(w, o->min_margin.phase);
         API_W_LIT(w, ",\"t\":");
         api__w_real(w, o->min_margin.t / omega);
       }
@@ -440,11 +435,11 @@ int ep_map_encode(const void *xp, const api_call *c, api_response *out) {
     ss_map_params(&x->ap.p, &x->opts, mp, cell, &q, &omega, NULL);
     API_W_LIT(&w, "{\"index\":[");
     if (mp->n_axes == 2) {
-      w_int(&w, cell / n1);
+      api__w_int(&w, cell / n1);
       API_W_LIT(&w, ",");
-      w_int(&w, cell % n1);
+      api__w_int(&w, cell % n1);
     } else {
-      w_int(&w, cell);
+      api__w_int(&w, cell);
     }
     API_W_LIT(&w, "],\"at\":{");
     for (int a = 0; a < mp->n_axes; a++) {
@@ -470,7 +465,7 @@ int ep_map_encode(const void *xp, const api_call *c, api_response *out) {
       API_W_LIT(&w, "false");
     if (ce->truncated) {
       API_W_LIT(&w, ",\"truncated\":");
-      w_int(&w, ce->truncated);
+      api__w_int(&w, ce->truncated);
     }
     API_W_LIT(&w, "}\n");
     with += ce->n_orbits > 0;
@@ -478,23 +473,18 @@ int ep_map_encode(const void *xp, const api_call *c, api_response *out) {
     complete += ce->complete;
   }
   /* the last line: counts, and the request as it was understood */
-  json_t *in = api__echo(&SPEC, x);
-  api__params_echo(in, &x->ap);
-  size_t n_in = 0;
-  char *in_text = api__dump(in, &n_in);
-  json_decref(in);
   API_W_LIT(&w, "{\"done\":true,\"cells\":");
-  w_int(&w, mp->n_cells);
+  api__w_int(&w, mp->n_cells);
   API_W_LIT(&w, ",\"with_orbits\":");
-  w_int(&w, with);
+  api__w_int(&w, with);
   API_W_LIT(&w, ",\"orbits\":");
-  w_int(&w, orbits);
+  api__w_int(&w, orbits);
   API_W_LIT(&w, ",\"complete\":");
-  w_int(&w, complete);
+  api__w_int(&w, complete);
   API_W_LIT(&w, ",\"searches\":");
-  w_int(&w, mp->searches);
+  api__w_int(&w, mp->searches);
   API_W_LIT(&w, ",\"solves\":");
-  w_int(&w, mp->solves);
+  api__w_int(&w, mp->solves);
   API_W_LIT(&w, ",\"seconds\":");
   api__w_real(&w, x->seconds);
   API_W_LIT(&w, ",\"units\":");
@@ -503,14 +493,15 @@ int ep_map_encode(const void *xp, const api_call *c, api_response *out) {
   else
     API_W_LIT(&w, "\"dimensionless\"");
   API_W_LIT(&w, ",\"version\":\"" SS_VERSION "\",\"input\":");
-  if (in_text)
-    api__w_put(&w, in_text, n_in);
-  else
-    API_W_LIT(&w, "null");
+  if (api__echo_as_tree) {
+    json_t *in = api__echo(&SPEC, x);
+    api__params_echo(in, &x->ap);
+    api__w_json(&w, in);
+    json_decref(in);
+  } else
+    api__w_echo(&w, &SPEC, x, &x->ap);
   API_W_LIT(&w, "}\n");
-  free(in_text);
-  (void)c;
-  if (w.oom || !in_text) {
+  if (w.oom) {
     free(w.p);
     return api__fail(c->e, API_P_OUT_OF_MEMORY, NULL,
                      "the answer could not be written: out of memory");
@@ -560,11 +551,11 @@ static void w_exacts(api_wbuf *w, const double *v, int n) {
 /* The search of @a cell as a group's result holds it. */
 static void w_found(api_wbuf *w, int cell, const ss_map_found *f) {
   API_W_LIT(w, "{\"cell\":");
-  w_int(w, cell);
+  api__w_int(w, cell);
   API_W_LIT(w, ",\"status\":");
-  w_int(w, f->status);
+  api__w_int(w, f->status);
   API_W_LIT(w, ",\"diag\":{\"status\":");
-  w_int(w, f->diag.status);
+  api__w_int(w, f->diag.status);
   API_W_LIT(w, ",\"where\":");
   api__w_str(w, f->diag.where, strnlen(f->diag.where, sizeof f->diag.where));
   API_W_LIT(w, ",\"value\":");
@@ -577,19 +568,19 @@ static void w_found(api_wbuf *w, int cell, const ss_map_found *f) {
     if (i)
       API_W_LIT(w, ",");
     API_W_LIT(w, "{\"kind\":");
-    w_int(w, o->kind);
+    api__w_int(w, o->kind);
     API_W_LIT(w, ",\"modes\":[");
     for (int k = 0; k < o->n_phases; k++) {
       if (k)
         API_W_LIT(w, ",");
-      w_int(w, o->modes[k]);
+      api__w_int(w, o->modes[k]);
     }
     API_W_LIT(w, "],\"durations\":");
     w_exacts(w, o->durations, o->n_phases);
     API_W_LIT(w, ",\"period\":");
     w_exact(w, o->period);
     API_W_LIT(w, ",\"n_turns\":");
-    w_int(w, o->n_turns);
+    api__w_int(w, o->n_turns);
     API_W_LIT(w, ",\"z0\":");
     w_exacts(w, o->z0, 4);
     API_W_LIT(w, ",\"eig_re\":");
@@ -599,17 +590,17 @@ static void w_found(api_wbuf *w, int cell, const ss_map_found *f) {
     API_W_LIT(w, ",\"spectral_radius\":");
     w_exact(w, o->spectral_radius);
     API_W_LIT(w, ",\"stable\":");
-    w_int(w, o->stable);
+    api__w_int(w, o->stable);
     API_W_LIT(w, ",\"marginal\":");
-    w_int(w, o->marginal);
+    api__w_int(w, o->marginal);
     API_W_LIT(w, ",\"min_margin\":[");
     w_exact(w, o->min_margin.value);
     API_W_LIT(w, ",");
-    w_int(w, o->min_margin.phase);
+    api__w_int(w, o->min_margin.phase);
     API_W_LIT(w, ",");
     w_exact(w, o->min_margin.t);
     API_W_LIT(w, "],\"from_cell\":");
-    w_int(w, o->from_cell);
+    api__w_int(w, o->from_cell);
     API_W_LIT(w, "}");
   }
   API_W_LIT(w, "]}");

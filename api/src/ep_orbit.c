@@ -241,9 +241,8 @@ static void w_margin(api_wbuf *w, const ss_margin *mg, const api_params *ap,
   API_W_LIT(w, "{\"value\":");
   api__w_real(w, mg->value);
   if (mg->phase >= 0) {
-    char num[24];
     API_W_LIT(w, ",\"phase\":");
-    api__w_put(w, num, (size_t)snprintf(num, sizeof num, "%d", mg->phase));
+    api__w_int(w, mg->phase);
     API_W_LIT(w, ",\"t\":");
     api__w_real(w, api__time_out(ap, mg->t));
   }
@@ -289,11 +288,6 @@ static void margins_item(api_wbuf *w, const api_lazy *l, size_t i) {
     w_margins(w, o, l->b);
 }
 
-static void w_key_int(api_wbuf *w, const char *key, long long v) {
-  char num[48];
-  api__w_put(w, num, (size_t)snprintf(num, sizeof num, ",\"%s\":%lld", key, v));
-}
-
 /* The members of orbit l->a, in the units of l->b, but for its samples. */
 static void orbit_item(api_wbuf *w, const api_lazy *l, size_t i) {
   const ss_orbit *o = l->a;
@@ -307,7 +301,8 @@ static void orbit_item(api_wbuf *w, const api_lazy *l, size_t i) {
   api__w_phases(w, o, ap);
   API_W_LIT(w, ",\"period\":");
   api__w_real(w, api__time_out(ap, o->period));
-  w_key_int(w, "n_turns", o->n_turns);
+  API_W_LIT(w, ",\"n_turns\":");
+  api__w_int(w, o->n_turns);
   API_W_LIT(w, ",\"z0\":");
   api__w_state(w, ap, o->z0);
   API_W_LIT(w, ",\"x0\":");
@@ -320,7 +315,8 @@ static void orbit_item(api_wbuf *w, const api_lazy *l, size_t i) {
   api__w_real(w, o->closure);
   API_W_LIT(w, ",\"stability\":");
   api__w_stability(w, &o->stab, ap);
-  w_key_int(w, "iterations", o->iterations);
+  API_W_LIT(w, ",\"iterations\":");
+  api__w_int(w, o->iterations);
   API_W_LIT(w, ",\"source\":");
   api__w_str(w, source, strlen(source));
 }
@@ -385,37 +381,61 @@ static json_t *cert_json(const ss_family_cert *fc, const api_params *ap) {
   return j;
 }
 
-static json_t *search_json(const orbit_x *x) {
+/* The "search" object: how the orbits were found, what the scan covered,
+ * and, asked for, the families' certificates ("complete": false with the
+ * reason where one was not made). */
+static void search_item(api_wbuf *w, const api_lazy *l, size_t i) {
+  const orbit_x *x = l->a;
   const ss_orbit_report *rep = &x->rep;
-  json_t *se = json_object();
-  api__set(se, "method", json_string(x->has_guess ? "guess" : "search"));
-  api__set(se, "simulations", json_integer(rep->simulations));
-  api__set(se, "newton_starts", json_integer(rep->newton_starts));
-  api__set(se, "roots", json_integer(rep->roots));
-  api__set(se, "infeasible", json_integer(rep->infeasible));
-  api__set(se, "duplicates", json_integer(rep->duplicates));
-  api__set(se, "truncated", json_integer(rep->truncated));
+  (void)i;
+  if (x->has_guess)
+    API_W_LIT(w, "{\"method\":\"guess\"");
+  else
+    API_W_LIT(w, "{\"method\":\"search\"");
+  API_W_LIT(w, ",\"simulations\":");
+  api__w_int(w, rep->simulations);
+  API_W_LIT(w, ",\"newton_starts\":");
+  api__w_int(w, rep->newton_starts);
+  API_W_LIT(w, ",\"roots\":");
+  api__w_int(w, rep->roots);
+  API_W_LIT(w, ",\"infeasible\":");
+  api__w_int(w, rep->infeasible);
+  API_W_LIT(w, ",\"duplicates\":");
+  api__w_int(w, rep->duplicates);
+  API_W_LIT(w, ",\"truncated\":");
+  api__w_int(w, rep->truncated);
   /* what "every orbit of the two period-1 families" covered */
   if (rep->scan_box > 0) {
-    json_t *sc = json_object();
-    api__set(sc, "max_duration",
-             api__real(api__time_out(&x->ap, rep->scan_box)));
-    api__set(sc, "max_duration_cap",
-             api__real(api__time_out(&x->ap, rep->scan_box_cap)));
-    api__set(sc, "step", api__real(api__time_out(&x->ap, rep->scan_step)));
-    api__set(se, "scan", sc);
+    API_W_LIT(w, ",\"scan\":{\"max_duration\":");
+    api__w_real(w, api__time_out(&x->ap, rep->scan_box));
+    API_W_LIT(w, ",\"max_duration_cap\":");
+    api__w_real(w, api__time_out(&x->ap, rep->scan_box_cap));
+    API_W_LIT(w, ",\"step\":");
+    api__w_real(w, api__time_out(&x->ap, rep->scan_step));
+    API_W_LIT(w, "}");
   }
-  /* asked for: the families' certificates ("complete": false with the
-   * reason where one was not made) */
   if (x->certify) {
-    json_t *ce = json_object();
     const char *name[2] = {"stick-slip", "overshoot"};
-    for (int f = 0; f < 2; f++)
-      if (rep->cert[f].ran)
-        api__set(ce, name[f], cert_json(&rep->cert[f], &x->ap));
-    api__set(se, "certificate", ce);
+    int first = 1;
+    API_W_LIT(w, ",\"certificate\":{");
+    for (int f = 0; f < 2; f++) {
+      if (!rep->cert[f].ran)
+        continue;
+      json_t *ce = cert_json(&rep->cert[f], &x->ap);
+      if (!first)
+        API_W_LIT(w, ",");
+      first = 0;
+      api__w_str(w, name[f], strlen(name[f]));
+      API_W_LIT(w, ":");
+      if (ce)
+        api__w_json(w, ce);
+      else
+        w->oom = 1;
+      json_decref(ce);
+    }
+    API_W_LIT(w, "}");
   }
-  return se;
+  API_W_LIT(w, "}");
 }
 
 int ep_orbit_encode(const void *xp, const api_call *c, api_response *out) {
@@ -431,7 +451,7 @@ int ep_orbit_encode(const void *xp, const api_call *c, api_response *out) {
     api__set(o, "reason", json_string(x->rep.reason));
   if (x->rep.has_rejected)
     api__set(o, "rejected", rejected_json(&x->rep, &x->ap, c));
-  api__set(o, "search", search_json(x));
+  api__set(o, "search", api__raw(c, search_item, x, NULL, 0));
   return api__answer(o, &SPEC, x, &x->ap, c, out);
 }
 

@@ -93,12 +93,18 @@ static json_t *lazy_new(const api_call *c, size_t n, api_item_fn *item,
     lz->v = v;
     lz->cap = cap;
   }
-  char tag[32];
-  snprintf(tag, sizeof tag, LAZY_TAG "%zu", lz->n);
+  /* the tag and the index in decimal, without printf's format parsing */
+  char tag[32] = LAZY_TAG, digits[24];
+  size_t d = sizeof digits, i = lz->n;
+  do
+    digits[--d] = (char)('0' + i % 10);
+  while ((i /= 10) != 0);
+  memcpy(tag + sizeof LAZY_TAG - 1, digits + d, sizeof digits - d);
+  tag[sizeof LAZY_TAG - 1 + sizeof digits - d] = 0;
   json_t *marker = json_string(tag);
   if (!marker)
     return NULL;
-  lz->v[lz->n++] = (api_lazy){marker, item, a, b, k, n, form};
+  lz->v[lz->n++] = (api_lazy){marker, item, a, b, k, n, form, NULL};
   lz->held += held;
   return marker;
 }
@@ -111,6 +117,14 @@ json_t *api__lazy(const api_call *c, size_t n, api_item_fn *item, const void *a,
 json_t *api__raw(const api_call *c, api_item_fn *item, const void *a,
                  const void *b, int k) {
   return lazy_new(c, 1, item, a, b, k, 0, API_LAZY_VALUE);
+}
+
+json_t *api__raw_aux(const api_call *c, api_item_fn *item, const void *a,
+                     const void *b, const void *aux) {
+  json_t *m = lazy_new(c, 1, item, a, b, 0, 0, API_LAZY_VALUE);
+  if (m)
+    c->lazy->v[c->lazy->n - 1].aux = aux;
+  return m;
 }
 
 /* The members go in under a key of their own, the marker's text: unique in
@@ -155,7 +169,7 @@ static void cut(cutter *ct, api_wbuf *b, const api_lazy *l);
 
 /* An integer in decimal, the bytes printf's %lld writes, without its
  * format parsing. */
-static void w_integer(api_wbuf *b, json_int_t v) {
+void api__w_int(api_wbuf *b, long long v) {
   char num[24];
   size_t k = sizeof num;
   unsigned long long u =
@@ -219,7 +233,7 @@ static void w_value(api_wbuf *b, const json_t *j, const api_lazies *lz,
     api__w_str(b, json_string_value(j), json_string_length(j));
     break;
   case JSON_INTEGER:
-    w_integer(b, json_integer_value(j));
+    api__w_int(b, json_integer_value(j));
     break;
   case JSON_REAL:
     api__w_real(b, json_real_value(j));
@@ -235,6 +249,8 @@ static void w_value(api_wbuf *b, const json_t *j, const api_lazies *lz,
     break;
   }
 }
+
+void api__w_json(api_wbuf *b, const json_t *j) { w_value(b, j, NULL, NULL); }
 
 char *api__dump(const json_t *j, size_t *len) {
   /* small texts are common (a batch item's id and body): the buffer starts

@@ -37,6 +37,7 @@ static inline void api__w_put(api_wbuf *b, const char *s, size_t n) {
 }
 void api__w_str(api_wbuf *b, const char *s, size_t n);
 void api__w_real(api_wbuf *b, double v);
+void api__w_int(api_wbuf *b, long long v); /* the bytes of printf's %lld */
 #define API_W_LIT(b, lit) api__w_put(b, lit, sizeof(lit) - 1)
 
 /* A lazy array: n elements, element i written by item() from a, b, k. */
@@ -54,6 +55,7 @@ struct api_lazy {
   int k;
   size_t n;
   api_lazy_form form;
+  const void *aux; /* a third thing item() reads (api__raw_aux), or NULL */
 };
 struct api_lazies {
   api_lazy *v;
@@ -79,6 +81,13 @@ json_t *api__raw(const api_call *c, api_item_fn *item, const void *a,
                  const void *b, int k);
 int api__set_fields(json_t *o, const api_call *c, api_item_fn *item,
                     const void *a, const void *b, int k);
+/* api__raw with @a aux as well, for item() to read as l->aux. */
+json_t *api__raw_aux(const api_call *c, api_item_fn *item, const void *a,
+                     const void *b, const void *aux);
+
+/* The text of the tree @a j, as the answer's writer writes it (a tree
+ * without lazy values). */
+void api__w_json(api_wbuf *b, const json_t *j);
 
 /* A 200 application/json answer with the body of @a j (consumed): written
  * whole, or a stream when its lazy arrays are larger than the server's
