@@ -27,28 +27,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "case_files.h"
 #include "job_runner.h"
 #include "stickslip.h"
 #include "stickslip_api.h"
-
-static char *slurp(const char *path, size_t *len) {
-  FILE *f = fopen(path, "rb");
-  if (!f)
-    return NULL;
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fseek(f, 0, SEEK_SET);
-  char *b = malloc((size_t)n + 1);
-  if (fread(b, 1, (size_t)n, f) != (size_t)n) {
-    fclose(f);
-    free(b);
-    return NULL;
-  }
-  fclose(f);
-  b[n] = 0;
-  *len = (size_t)n;
-  return b;
-}
 
 static int subset(json_t *want, json_t *got, char *path, size_t n) {
   size_t pl = strlen(path);
@@ -82,47 +64,6 @@ static int subset(json_t *want, json_t *got, char *path, size_t n) {
     return 1;
   }
   return json_equal(want, got);
-}
-
-/* Limits from limits.json, if there is one: each key names a field of
- * api_limits. */
-static int set_limits(const char *path, api_limits *lim) {
-  FILE *f = fopen(path, "rb");
-  if (!f)
-    return 0;
-  fclose(f);
-  json_t *j = json_load_file(path, 0, NULL);
-  const char *k;
-  json_t *v;
-  if (!json_is_object(j))
-    return -1;
-  json_object_foreach(j, k, v) {
-    double x = json_number_value(v);
-    if (!strcmp(k, "max_seconds"))
-      lim->max_seconds = x;
-    else if (!strcmp(k, "max_samples"))
-      lim->max_samples = (size_t)x;
-    else if (!strcmp(k, "max_events"))
-      lim->max_events = (size_t)x;
-    else if (!strcmp(k, "max_event_list"))
-      lim->max_event_list = (size_t)x;
-    else if (!strcmp(k, "max_horizon"))
-      lim->max_horizon = x;
-    else if (!strcmp(k, "max_orbits"))
-      lim->max_orbits = (int)x;
-    else if (!strcmp(k, "max_points"))
-      lim->max_points = (size_t)x;
-    else if (!strcmp(k, "max_map_cells"))
-      lim->max_map_cells = (size_t)x;
-    else if (!strcmp(k, "max_basin_cells"))
-      lim->max_basin_cells = (size_t)x;
-    else {
-      json_decref(j);
-      return -1;
-    }
-  }
-  json_decref(j);
-  return 0;
 }
 
 /* Whether the job of request @a req answers @a sync (compared but for
@@ -194,7 +135,7 @@ static int same_shape(const char *dir, const char *body) {
   char path[4096];
   size_t len;
   snprintf(path, sizeof path, "%s/shape.txt", dir);
-  char *want = slurp(path, &len);
+  char *want = case_slurp(path, &len);
   if (!want)
     return 1;
   while (len && want[len - 1] == '\n')
@@ -216,23 +157,16 @@ int main(int argc, char **argv) {
   ss_gsl_quiet();
   const char *base = strrchr(argv[1], '/');
   base = base ? base + 1 : argv[1];
-  size_t ep = api_endpoint_count();
-  for (size_t i = 0; i < api_endpoint_count(); i++) {
-    const api_endpoint *row = api_endpoint_at(i);
-    size_t n = strlen(row->label);
-    if (row->run_class == API_RUN_COMPUTE && !strncmp(base, row->label, n) &&
-        base[n] == '-')
-      ep = i;
-  }
+  size_t ep = case_endpoint(base);
   if (ep == api_endpoint_count()) {
     fprintf(stderr, "%s: the name must start with a computing endpoint\n",
             base);
     return 2;
   }
   snprintf(path, sizeof path, "%s/request.json", argv[1]);
-  char *req = slurp(path, &len);
+  char *req = case_slurp(path, &len);
   snprintf(path, sizeof path, "%s/expect.json", argv[1]);
-  char *exp = slurp(path, &elen);
+  char *exp = case_slurp(path, &elen);
   json_t *want = exp ? json_loads(exp, 0, NULL) : NULL;
   if (!req || !want) {
     fprintf(stderr, "%s: missing request.json or expect.json\n", base);
@@ -242,8 +176,8 @@ int main(int argc, char **argv) {
   api_limits_default(&lim);
   snprintf(path, sizeof path, "%s/limits.json", argv[1]);
   size_t lim_len;
-  char *lim_text = slurp(path, &lim_len);
-  if (set_limits(path, &lim)) {
+  char *lim_text = case_slurp(path, &lim_len);
+  if (case_limits(path, &lim)) {
     fprintf(stderr, "%s: bad limits.json\n", base);
     return 2;
   }

@@ -21,6 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "case_files.h"
 #include "decode.h"
 #include "stickslip.h"
 #include "stickslip_api.h"
@@ -33,21 +34,6 @@
     if (!(c))                                                                  \
       TEST_FAIL_(__VA_ARGS__);                                                 \
   } while (0)
-
-static char *slurp(const char *path, size_t *len) {
-  FILE *f = fopen(path, "rb");
-  if (!f)
-    return NULL;
-  fseek(f, 0, SEEK_END);
-  long n = ftell(f);
-  fseek(f, 0, SEEK_SET);
-  char *b = malloc((size_t)n + 1);
-  size_t got = fread(b, 1, (size_t)n, f);
-  fclose(f);
-  b[got] = 0;
-  *len = got;
-  return b;
-}
 
 /* The top-level "input" member of answer @a a: its value, from after
  * "input": to the "," before the "units" that api__answer writes after
@@ -68,48 +54,6 @@ static const char *input_of(const char *a, size_t *n) {
     return NULL;
   return k + 8;
 }
-
-/* Limits a case sets (limits.json): the keys test_case.c reads. */
-static void set_limits(const char *path, api_limits *lim) {
-  json_t *j = json_load_file(path, 0, NULL);
-  const char *k;
-  json_t *v;
-  json_object_foreach(j, k, v) {
-    double x = json_number_value(v);
-    if (!strcmp(k, "max_seconds"))
-      lim->max_seconds = x;
-    else if (!strcmp(k, "max_samples"))
-      lim->max_samples = (size_t)x;
-    else if (!strcmp(k, "max_events"))
-      lim->max_events = (size_t)x;
-    else if (!strcmp(k, "max_event_list"))
-      lim->max_event_list = (size_t)x;
-    else if (!strcmp(k, "max_horizon"))
-      lim->max_horizon = x;
-    else if (!strcmp(k, "max_orbits"))
-      lim->max_orbits = (int)x;
-    else if (!strcmp(k, "max_points"))
-      lim->max_points = (size_t)x;
-    else if (!strcmp(k, "max_map_cells"))
-      lim->max_map_cells = (size_t)x;
-    else if (!strcmp(k, "max_basin_cells"))
-      lim->max_basin_cells = (size_t)x;
-  }
-  json_decref(j);
-}
-
-static size_t endpoint_of(const char *name) {
-  for (size_t i = 0; i < api_endpoint_count(); i++) {
-    const api_endpoint *row = api_endpoint_at(i);
-    size_t n = strlen(row->label);
-    if (row->run_class == API_RUN_COMPUTE && !strncmp(name, row->label, n) &&
-        name[n] == '-')
-      return i;
-  }
-  return api_endpoint_count();
-}
-
-static int compared, whole, physical, custom;
 
 static int compared, whole, physical, custom;
 static unsigned endpoints_seen; /* bit i: endpoint i answered 200 */
@@ -155,21 +99,17 @@ static void check(size_t ep, const char *req, size_t len,
 
 static void check_case(const char *dir, const char *name) {
   char path[4096];
-  size_t len, ep = endpoint_of(name);
+  size_t len, ep = case_endpoint(name);
   if (ep == api_endpoint_count())
     return;
   snprintf(path, sizeof path, "%s/%s/request.json", dir, name);
-  char *req = slurp(path, &len);
+  char *req = case_slurp(path, &len);
   if (!req)
     return;
   api_limits lim;
   api_limits_default(&lim);
   snprintf(path, sizeof path, "%s/%s/limits.json", dir, name);
-  FILE *lf = fopen(path, "rb");
-  if (lf) {
-    fclose(lf);
-    set_limits(path, &lim);
-  }
+  CHECK_MSG(case_limits(path, &lim) == 0, "%s: bad limits.json", name);
   check(ep, req, len, &lim, name);
   free(req);
 }
