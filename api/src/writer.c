@@ -79,9 +79,19 @@ void api__w_real(api_wbuf *b, double v) {
  * writer checks the pointer too, so no request text can pose as one. */
 #define LAZY_TAG "\001lazy"
 
+/* The decimal digits of @a u, written to end at @a end; their count.  The
+ * bytes printf's %llu writes, without its format parsing. */
+static size_t decimal(char *end, unsigned long long u) {
+  char *p = end;
+  do
+    *--p = (char)('0' + u % 10);
+  while ((u /= 10) != 0);
+  return (size_t)(end - p);
+}
+
 static json_t *lazy_new(const api_call *c, size_t n, api_item_fn *item,
                         const void *a, const void *b, int k, size_t held,
-                        api_lazy_form form) {
+                        api_lazy_form form, const void *aux) {
   api_lazies *lz = c->lazy;
   if (!lz) /* api_handle always gives one */
     return NULL;
@@ -93,45 +103,39 @@ static json_t *lazy_new(const api_call *c, size_t n, api_item_fn *item,
     lz->v = v;
     lz->cap = cap;
   }
-  /* the tag and the index in decimal, without printf's format parsing */
+  /* the tag and the index in decimal */
   char tag[32] = LAZY_TAG, digits[24];
-  size_t d = sizeof digits, i = lz->n;
-  do
-    digits[--d] = (char)('0' + i % 10);
-  while ((i /= 10) != 0);
-  memcpy(tag + sizeof LAZY_TAG - 1, digits + d, sizeof digits - d);
-  tag[sizeof LAZY_TAG - 1 + sizeof digits - d] = 0;
+  size_t d = decimal(digits + sizeof digits, lz->n);
+  memcpy(tag + sizeof LAZY_TAG - 1, digits + sizeof digits - d, d);
+  tag[sizeof LAZY_TAG - 1 + d] = 0;
   json_t *marker = json_string(tag);
   if (!marker)
     return NULL;
-  lz->v[lz->n++] = (api_lazy){marker, item, a, b, k, n, form, NULL};
+  lz->v[lz->n++] = (api_lazy){marker, item, a, b, k, n, form, aux};
   lz->held += held;
   return marker;
 }
 
 json_t *api__lazy(const api_call *c, size_t n, api_item_fn *item, const void *a,
                   const void *b, int k, size_t held) {
-  return lazy_new(c, n, item, a, b, k, held, API_LAZY_ARRAY);
+  return lazy_new(c, n, item, a, b, k, held, API_LAZY_ARRAY, NULL);
 }
 
 json_t *api__raw(const api_call *c, api_item_fn *item, const void *a,
                  const void *b, int k) {
-  return lazy_new(c, 1, item, a, b, k, 0, API_LAZY_VALUE);
+  return lazy_new(c, 1, item, a, b, k, 0, API_LAZY_VALUE, NULL);
 }
 
 json_t *api__raw_aux(const api_call *c, api_item_fn *item, const void *a,
                      const void *b, const void *aux) {
-  json_t *m = lazy_new(c, 1, item, a, b, 0, 0, API_LAZY_VALUE);
-  if (m)
-    c->lazy->v[c->lazy->n - 1].aux = aux;
-  return m;
+  return lazy_new(c, 1, item, a, b, 0, 0, API_LAZY_VALUE, aux);
 }
 
 /* The members go in under a key of their own, the marker's text: unique in
  * the object, and in the order it was set. */
 int api__set_fields(json_t *o, const api_call *c, api_item_fn *item,
                     const void *a, const void *b, int k) {
-  json_t *m = lazy_new(c, 1, item, a, b, k, 0, API_LAZY_FIELDS);
+  json_t *m = lazy_new(c, 1, item, a, b, k, 0, API_LAZY_FIELDS, NULL);
   return m ? json_object_set_new(o, json_string_value(m), m) : -1;
 }
 
@@ -167,16 +171,12 @@ typedef struct cutter {
 
 static void cut(cutter *ct, api_wbuf *b, const api_lazy *l);
 
-/* An integer in decimal, the bytes printf's %lld writes, without its
- * format parsing. */
+/* An integer in decimal, the bytes printf's %lld writes. */
 void api__w_int(api_wbuf *b, long long v) {
   char num[24];
-  size_t k = sizeof num;
-  unsigned long long u =
-      v < 0 ? 0ULL - (unsigned long long)v : (unsigned long long)v;
-  do
-    num[--k] = (char)('0' + u % 10);
-  while ((u /= 10) != 0);
+  size_t k = sizeof num -
+             decimal(num + sizeof num, v < 0 ? 0ULL - (unsigned long long)v
+                                             : (unsigned long long)v);
   if (v < 0)
     num[--k] = '-';
   api__w_put(b, num + k, sizeof num - k);
