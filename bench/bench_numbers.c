@@ -1,7 +1,7 @@
 /*
  * bench_numbers.c: the cost of writing a double in an answer.  The
- * writer's shortest digits (api/src/shortest.c: Grisu3, glibc for the rare
- * unsure case) against the strongest plain-C alternatives: glibc's
+ * writer's shortest digits (api/src/shortest.c: Schubfach, integers only)
+ * against the strongest plain-C alternatives: glibc's
  * printf("%.17g") (17 digits, always exact, not the shortest), and the
  * writer's former rule (%.17g, then %.15g and %.16g read back with strtod
  * when the 17 digits end in 0000 or 9999).  Two sets of 10^6 doubles: the
@@ -68,7 +68,7 @@ int main(int argc, char **argv) {
   struct {
     const char *name;
     int (*fn)(double, char *);
-  } how[] = {{"shortest digits (Grisu3)", api__shortest},
+  } how[] = {{"shortest digits (Schubfach)", api__shortest},
              {"printf %.17g", printf17},
              {"former rule (%.17g, then %.15g/%.16g)", former}};
   FILE *out = stdout, *f = NULL;

@@ -1,38 +1,36 @@
 /*
  * shortest.c: a double in the fewest decimal digits that read back as the
  * same double (the closest to it when several of that length do), with
- * 64-bit integers: Grisu3 (F. Loitsch, "Printing floating-point numbers
- * quickly and accurately with integers", PLDI 2010).  For the few doubles
- * where Grisu3 cannot be sure (about 1 in 200; tests/api/test_numbers.c
- * counts), glibc's correctly rounded printf gives the digits instead.
- * bench/bench_numbers.c measures it against printf("%.17g").
+ * 64-bit integers: Schubfach (R. Giulietti, "The Schubfach way to render
+ * doubles", 2020).  The decimals of one and two digits fewer than the
+ * double's scale that lie in the interval reading back as it are found
+ * from three products of 128 by 64 bits, rounded to odd, which the paper
+ * proves exact enough to decide every case: no double needs a slower path.
+ * tests/api/test_numbers.c checks it against glibc's correctly rounded
+ * printf; bench/bench_numbers.c measures it against printf("%.17g").
  *
- * The powers of ten it needs (10^k, k = -348, -340, ..., 340, each as a
- * 64-bit significand rounded to nearest and a binary exponent) are
- * computed once, exactly, from big integers, rather than typed in.
+ * The powers of ten it needs (g = floor(10^k 2^(127 - floor(log2 10^k)))
+ * + 1 for k = -292 .. 326, 128 bits each) are computed once, exactly, from
+ * big integers, rather than typed in.
  */
-#include <math.h>
 #include <pthread.h>
 #include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "shortest.h"
 
+enum { K_MIN = -292, K_MAX = 326, K_N = K_MAX - K_MIN + 1 };
+
 typedef struct {
-  uint64_t f;
-  int e;
-} diy; /* f * 2^e */
+  uint64_t hi, lo;
+} g128; /* hi 2^64 + lo */
 
-enum { POW_MIN = -348, POW_STEP = 8, POW_N = 87 };
-
-static diy pow10_cache[POW_N]; /* 10^(POW_MIN + POW_STEP * i) */
-static pthread_once_t pow10_once = PTHREAD_ONCE_INIT;
+static g128 g_table[K_N]; /* g for 10^(K_MIN + i) */
+static pthread_once_t g_once = PTHREAD_ONCE_INIT;
 
 /* ---- the table, from big integers --------------------------------------- */
 
-enum { LIMBS = 48 }; /* 1536 bits: 10^340 has 1130, 2^1235 / 10^348 needs */
+enum { LIMBS = 40 }; /* 1280 bits: 10^326 has 1083, 2^1184 has 1185 */
 
 typedef struct {
   uint32_t w[LIMBS]; /* little endian */
@@ -69,193 +67,182 @@ static int big_bit(const big *a, int i) {
   return i >= 0 && ((a->w[i / 32] >> (i % 32)) & 1);
 }
 
-/* The 64 leading bits of @a a, rounded to nearest (a tie, which the
- * powers of ten in the table never are, rounds up); the binary exponent
- * of the result in a's units. */
-static diy big_top64(const big *a) {
-  int n = big_bits(a), lo = n - 64;
-  diy r = {0, lo};
+/* The 128 leading bits of @a a, rounded down (@a a has some). */
+static unsigned __int128 big_top128(const big *a) {
+  int n = big_bits(a), lo = n - 128;
+  unsigned __int128 r = 0;
   for (int i = n - 1; i >= lo && i >= 0; i--)
-    r.f = (r.f << 1) | (uint64_t)big_bit(a, i);
-  if (lo < 0) { /* fewer than 64 bits: exact */
-    r.f <<= -lo;
-    return r;
-  }
-  if (big_bit(a, lo - 1) && ++r.f == 0) {
-    r.f = (uint64_t)1 << 63;
-    r.e++;
-  }
+    r = (r << 1) | (unsigned __int128)big_bit(a, i);
+  if (lo < 0) /* fewer than 128 bits: exact */
+    r <<= -lo;
   return r;
 }
 
-static void pow10_build(void) {
-  for (int i = 0; i < POW_N; i++) {
-    int k = POW_MIN + POW_STEP * i;
-    big a;
-    memset(&a, 0, sizeof a);
-    if (k >= 0) {
-      a.w[0] = 1;
-      for (int j = 0; j < k; j++)
-        big_mul10(&a);
-      pow10_cache[i] = big_top64(&a);
-    } else {
-      /* floor(2^b / 10^-k), 67 bits or more, then 10^k = that / 2^b; the
-       * bits dropped below the 65th decide the rounding only in a tie,
-       * which cannot happen (10^k is not a dyadic rational) */
-      int b = (int)(-k * 3.3219280948873623) + 67;
-      a.w[b / 32] = 1u << (b % 32);
-      for (int j = 0; j < -k; j++)
-        big_div10(&a);
-      pow10_cache[i] = big_top64(&a);
-      pow10_cache[i].e -= b;
-    }
+static void g_put(int k, unsigned __int128 top) {
+  g_table[k - K_MIN].hi = (uint64_t)(top >> 64);
+  g_table[k - K_MIN].lo = (uint64_t)top;
+  /* + 1: above 10^k 2^(127 - e) even where that is whole */
+  if (++g_table[k - K_MIN].lo == 0)
+    g_table[k - K_MIN].hi++;
+}
+
+static void g_build(void) {
+  big a;
+  memset(&a, 0, sizeof a);
+  a.w[0] = 1;
+  for (int k = 0; k <= K_MAX; k++) {
+    if (k)
+      big_mul10(&a);
+    g_put(k, big_top128(&a));
+  }
+  /* floor(2^B / 10^j), each division rounding down, is floor of the
+   * quotient itself; 2^B / 10^292 still has over 128 bits */
+  enum { B = 1184 };
+  memset(&a, 0, sizeof a);
+  a.w[B / 32] = 1u << (B % 32);
+  for (int k = -1; k >= K_MIN; k--) {
+    big_div10(&a);
+    g_put(k, big_top128(&a));
   }
 }
 
-int api__pow10_cached(int i, uint64_t *f, int *e) {
-  if (i < 0 || i >= POW_N)
+/* floor(log2 10^k) and floor(log10 2^q), exact over the doubles' range. */
+static int floor_log2_pow10(int k) { return (k * 1741647) >> 19; }
+
+int api__pow10_g(int k, uint64_t *hi, uint64_t *lo, int *e) {
+  if (k < K_MIN || k > K_MAX)
     return 0;
-  pthread_once(&pow10_once, pow10_build);
-  *f = pow10_cache[i].f;
-  *e = pow10_cache[i].e;
-  return POW_MIN + POW_STEP * i;
+  pthread_once(&g_once, g_build);
+  *hi = g_table[k - K_MIN].hi;
+  *lo = g_table[k - K_MIN].lo;
+  *e = floor_log2_pow10(k);
+  return 1;
 }
 
-/* ---- Grisu3 ---------------------------------------------------------------
+/* ---- Schubfach ------------------------------------------------------------
  */
 
-/* a * b, the upper 64 bits of the product rounded. */
-static diy diy_mul(diy a, diy b) {
-  unsigned __int128 p = (unsigned __int128)a.f * b.f;
-  uint64_t h = (uint64_t)(p >> 64), l = (uint64_t)p;
-  return (diy){h + (l >> 63), a.e + b.e + 64};
+/* floor(g cp / 2^128), made odd when the product has bits below that
+ * (those under the last 64 never decide: the paper's rounding to odd). */
+static uint64_t round_odd(g128 g, uint64_t cp) {
+  unsigned __int128 x = (unsigned __int128)g.lo * cp;
+  unsigned __int128 y = (unsigned __int128)g.hi * cp + (uint64_t)(x >> 64);
+  return (uint64_t)(y >> 64) | ((uint64_t)y > 1);
 }
 
-static diy diy_norm(diy a) {
-  int s = __builtin_clzll(a.f);
-  return (diy){a.f << s, a.e - s};
-}
-
-/* Grisu3's weeding: step the last digit down towards the double while
- * that brings it closer, then say whether the result is certainly the
- * closest within the interval that reads back as v (1), or whether the
- * imprecision of the products (@a unit) leaves that open (0).  Distances
- * are to the upper bound widened by one unit. */
-static int round_weed(char *buf, int len, uint64_t too_high_w, uint64_t unsafe,
-                      uint64_t rest, uint64_t ten_kappa, uint64_t unit) {
-  uint64_t small = too_high_w - unit, large = too_high_w + unit;
-  while (
-      rest < small && unsafe - rest >= ten_kappa &&
-      (rest + ten_kappa < small || small - rest >= rest + ten_kappa - small)) {
-    buf[len - 1]--;
-    rest += ten_kappa;
-  }
-  if (rest < large && unsafe - rest >= ten_kappa &&
-      (rest + ten_kappa < large || large - rest > rest + ten_kappa - large))
-    return 0;
-  return 2 * unit <= rest && rest <= unsafe - 4 * unit;
-}
-
-static const uint32_t P10[] = {
-    1, 10, 100, 1000, 10000, 100000, 1000000, 10000000, 100000000, 1000000000};
-
-/* The digits of the scaled upper bound, as few as leave the scaled
- * interval (low, high) widened by one unit each side: their count, or 0
- * when they are not certainly the shortest and closest. */
-static int digit_gen(diy w, diy low, diy high, char *buf, int *k) {
-  int shift = -w.e; /* 32..59 */
-  uint64_t unit = 1, one = (uint64_t)1 << shift;
-  if (high.f == UINT64_MAX)
-    return 0;
-  uint64_t too_high = high.f + unit, unsafe = too_high - (low.f - unit);
-  uint32_t p1 = (uint32_t)(too_high >> shift);
-  uint64_t p2 = too_high & (one - 1);
-  int kappa = 1, len = 0;
-  while (kappa < 10 && p1 >= P10[kappa])
-    kappa++;
-  while (kappa > 0) {
-    buf[len++] = (char)('0' + p1 / P10[kappa - 1]);
-    p1 %= P10[kappa - 1];
-    kappa--;
-    uint64_t rest = ((uint64_t)p1 << shift) + p2;
-    if (rest < unsafe) {
-      *k += kappa;
-      return round_weed(buf, len, too_high - w.f, unsafe, rest,
-                        (uint64_t)P10[kappa] << shift, unit)
-                 ? len
-                 : 0;
-    }
-  }
-  for (;;) {
-    p2 *= 10;
-    unit *= 10;
-    unsafe *= 10;
-    buf[len++] = (char)('0' + (p2 >> shift));
-    p2 &= one - 1;
-    kappa--;
-    if (p2 < unsafe) {
-      *k += kappa;
-      return round_weed(buf, len, (too_high - w.f) * unit, unsafe, p2, one,
-                        unit)
-                 ? len
-                 : 0;
-    }
-  }
-}
-
-/* The shortest digits of the finite, nonzero |v| (v = digits * 10^k), the
- * closest to v of that many; their count, or 0 when Grisu3 cannot be sure
- * (about 0.5% of doubles). */
-int api__grisu3(double v, char *buf, int *k) {
+/* The shortest decimal of the finite, nonzero |v|, the closest to it of
+ * that length: v = d 10^k, d with no trailing zero. */
+static uint64_t to_decimal(double v, int *k) {
   uint64_t bits;
   memcpy(&bits, &v, sizeof bits);
-  uint64_t frac = bits & (((uint64_t)1 << 52) - 1);
-  int bexp = (int)((bits >> 52) & 0x7ff);
-  diy x =
-      bexp ? (diy){frac | (uint64_t)1 << 52, bexp - 1075} : (diy){frac, -1074};
-  /* the bounds of the interval that reads back as v */
-  diy plus = diy_norm((diy){(x.f << 1) + 1, x.e - 1});
-  diy minus = frac == 0 && bexp > 1 ? (diy){(x.f << 2) - 1, x.e - 2}
-                                    : (diy){(x.f << 1) - 1, x.e - 1};
-  minus.f <<= minus.e - plus.e;
-  minus.e = plus.e;
-  diy w = diy_norm(x);
-  /* a cached 10^-k that brings the exponent into [-59, -32] */
-  pthread_once(&pow10_once, pow10_build);
-  int i = (int)((-59 - 64 - plus.e - pow10_cache[0].e) / 26.575424759098897);
-  if (i < 0)
-    i = 0;
-  if (i >= POW_N)
-    i = POW_N - 1;
-  while (i < POW_N - 1 && plus.e + pow10_cache[i].e + 64 < -59)
-    i++;
-  while (i > 0 && plus.e + pow10_cache[i].e + 64 > -32)
-    i--;
-  diy c = pow10_cache[i];
-  *k = -(POW_MIN + POW_STEP * i);
-  return digit_gen(diy_mul(w, c), diy_mul(minus, c), diy_mul(plus, c), buf, k);
+  uint64_t frac = bits & (((uint64_t)1 << 52) - 1), c;
+  int bexp = (int)((bits >> 52) & 0x7ff), q;
+  if (bexp) {
+    c = frac | (uint64_t)1 << 52;
+    q = bexp - 1075;
+  } else {
+    c = frac;
+    q = -1074;
+  }
+  uint64_t d;
+  if (q <= 0 && q > -53 && (c & (((uint64_t)1 << -q) - 1)) == 0) {
+    d = c >> -q; /* a whole number below 2^53 */
+    *k = 0;
+  } else {
+    /* the interval that reads back as v, in quarters of 2^q: [cbl, cbr],
+     * closed when c is even; its lower half is narrower at a power of 2 */
+    int even = !(c & 1), closer = frac == 0 && bexp > 1;
+    uint64_t cbl = 4 * c - 2 + (uint64_t)closer, cb = 4 * c, cbr = 4 * c + 2;
+    /* 10^e10 <= 2^q (3/4 2^q when closer) < 10^(e10 + 1) */
+    int e10 = (q * 1262611 - (closer ? 524031 : 0)) >> 22;
+    int h = q + floor_log2_pow10(-e10) + 1; /* 1 .. 4 */
+    pthread_once(&g_once, g_build);
+    g128 g = g_table[-e10 - K_MIN];
+    /* the bounds and v times 10^-e10, times 4, rounded to odd */
+    uint64_t vbl = round_odd(g, cbl << h), vb = round_odd(g, cb << h),
+             vbr = round_odd(g, cbr << h);
+    uint64_t lower = vbl + !even, upper = vbr - !even, s = vb / 4;
+    *k = e10;
+    int done = 0;
+    if (s >= 10) { /* one digit fewer: s' or s' + 1, tens of s */
+      uint64_t sp = s / 10;
+      int up_in = lower <= 40 * sp, wp_in = 40 * sp + 40 <= upper;
+      if (up_in != wp_in) {
+        d = sp + (uint64_t)wp_in;
+        *k = e10 + 1;
+        done = 1;
+      }
+    }
+    if (!done) {
+      int u_in = lower <= 4 * s, w_in = 4 * s + 4 <= upper;
+      if (u_in != w_in)
+        d = s + (uint64_t)w_in;
+      else /* both: the closer, the even one on a tie */
+        d = s + (uint64_t)(vb > 4 * s + 2 || (vb == 4 * s + 2 && (s & 1)));
+    }
+  }
+  /* the trailing zeros off (a short decimal has a dozen): 8 at a time,
+   * then 4, 2, 1 */
+  while (d % 100000000 == 0) {
+    d /= 100000000;
+    *k += 8;
+  }
+  for (int z = 4; z; z /= 2) {
+    uint64_t p = z == 4 ? 10000 : z == 2 ? 100 : 10;
+    if (d % p == 0) {
+      d /= p;
+      *k += z;
+    }
+  }
+  return d;
 }
 
-/* The same from glibc, when Grisu3 cannot be sure: 15 correctly rounded
- * digits are the shortest whenever 15 or fewer read back (two decimals of
- * 15 digits are farther apart than a double's interval); otherwise 16,
- * otherwise 17. */
-static int digits_printf(double v, char *buf, int *k) {
-  char s[40];
-  for (int p = 15;; p++) {
-    snprintf(s, sizeof s, "%.*e", p - 1, fabs(v));
-    if (p == 17 || strtod(s, NULL) == fabs(v))
-      break;
-  }
-  int len = 0;
-  const char *q = s;
-  for (; *q != 'e'; q++)
-    if (*q != '.')
-      buf[len++] = *q;
-  while (len > 1 && buf[len - 1] == '0')
-    len--;
-  *k = atoi(q + 1) + 1 - len;
-  return len;
+static const char PAIRS[] =
+    "00010203040506070809101112131415161718192021222324"
+    "25262728293031323334353637383940414243444546474849"
+    "50515253545556575859606162636465666768697071727374"
+    "75767778798081828384858687888990919293949596979899";
+
+/* @a x below 10^8 as its 8 digits, leading zeros included: two halves,
+ * and the pairs of each, found independently. */
+static inline void put8(char *p, uint32_t x) {
+  uint32_t a = x / 10000, b = x % 10000;
+  memcpy(p, PAIRS + 2 * (a / 100), 2);
+  memcpy(p + 2, PAIRS + 2 * (a % 100), 2);
+  memcpy(p + 4, PAIRS + 2 * (b / 100), 2);
+  memcpy(p + 6, PAIRS + 2 * (b % 100), 2);
+}
+
+/* The decimal digits of @a d (> 0, below 10^17) into @a buf; their
+ * count. */
+static int digits_of(uint64_t d, char *buf) {
+  static const uint64_t P10[] = {1,
+                                 10,
+                                 100,
+                                 1000,
+                                 10000,
+                                 100000,
+                                 1000000,
+                                 10000000,
+                                 100000000,
+                                 1000000000,
+                                 10000000000,
+                                 100000000000,
+                                 1000000000000,
+                                 10000000000000,
+                                 100000000000000,
+                                 1000000000000000,
+                                 10000000000000000};
+  /* 17 digits with leading zeros, then the n that d has */
+  char t[17];
+  uint64_t hi = d / 100000000;
+  t[0] = (char)('0' + hi / 100000000);
+  put8(t + 1, (uint32_t)(hi % 100000000));
+  put8(t + 9, (uint32_t)(d % 100000000));
+  int n = (64 - __builtin_clzll(d)) * 1233 >> 12; /* floor or one less */
+  n += n < 17 && d >= P10[n];
+  memcpy(buf, t + 17 - n, (size_t)n);
+  return n;
 }
 
 int api__shortest(double v, char *out) {
@@ -269,9 +256,8 @@ int api__shortest(double v, char *out) {
     return (int)(o - out) + 3;
   }
   char d[24];
-  int k = 0, len = api__grisu3(v, d, &k);
-  if (!len)
-    len = digits_printf(v, d, &k);
+  int k;
+  int len = digits_of(to_decimal(v, &k), d);
   int n = len + k; /* v = 0.d1d2... * 10^n */
   if (n - 1 < -4 || n - 1 >= 17) {
     /* d1.d2...e+XX, as printf's %g writes it */

@@ -7,15 +7,13 @@
 
 #include <stdint.h>
 
-/* @a v, finite, as few digits as read back as v, or one more, written as
- * printf's %g writes them, with ".0" added to a whole number, into @a out
- * (32 bytes); the length. */
+/* @a v, finite, in as few digits as read back as v (the closest to v of
+ * that many), written as printf's %g writes them, with ".0" added to a
+ * whole number, into @a out (32 bytes); the length. */
 int api__shortest(double v, char *out);
-/* Entry @a i of the cached powers of ten: 10^k ~ f * 2^e, k returned
- * (0 when @a i is past the table). */
-int api__pow10_cached(int i, uint64_t *f, int *e);
-/* The shortest digits of the finite, nonzero |v| (v = digits * 10^k) by
- * Grisu3 alone: their count, or 0 when it cannot be sure. */
-int api__grisu3(double v, char *digits, int *k);
+/* The power of ten the digits of a double are scaled by:
+ * hi 2^64 + lo = floor(10^k 2^(127 - e)) + 1, e = floor(log2 10^k); 0 when
+ * @a k is past the table (-292 .. 326). */
+int api__pow10_g(int k, uint64_t *hi, uint64_t *lo, int *e);
 
 #endif

@@ -2,9 +2,10 @@
  * test_numbers.c: the digits of the numbers in every answer (shortest.c).
  *
  * Checked against glibc, which converts with multi-precision arithmetic:
- * each cached power of ten against strtold (exactly, where long double has
- * a 64-bit significand); each number written must read back (strtod) as
- * the same double, bit for bit, must be a JSON number, and must have the
+ * each power of ten of the table against strtold (its leading 64 bits,
+ * where long double has a 64-bit significand), and exactly against
+ * 128-bit integers where 10^k fits; each number written must read back (strtod)
+ * as the same double, bit for bit, must be a JSON number, and must have the
  * fewest digits that read back, the closest to it of that many (found by
  * trying printf's correctly rounded %.*e from 1 to 17 digits, and its
  * neighbours).
@@ -24,7 +25,7 @@
 #include "shortest.h"
 #include "test.h"
 
-static struct { long n, exact, fallback, bad; } st;
+static struct { long n, exact, bad; } st;
 
 /* A JSON number: -?(0|[1-9][0-9]*)(\.[0-9]+)?([eE][+-]?[0-9]+)? */
 static int json_number(const char *s) {
@@ -83,10 +84,10 @@ static void digits_of(const char *s, char *dig, int *n) {
 }
 
 static void check(double v) {
-  char out[40], ref[48], dig[40], rdig[40], g[24];
+  char out[40], ref[48], dig[40], rdig[40];
   if (!isfinite(v))
     return;
-  int n = api__shortest(v, out), rn, on, gk;
+  int n = api__shortest(v, out), rn, on;
   st.n++;
   if (n != (int)strlen(out) || !json_number(out) || strtod(out, NULL) != v ||
       signbit(strtod(out, NULL)) != signbit(v)) {
@@ -96,7 +97,6 @@ static void check(double v) {
   }
   if (v == 0)
     return;
-  st.fallback += api__grisu3(v, g, &gk) == 0;
   /* the shortest: for 1, 2, ... digits, the correctly rounded decimal, or
    * else its neighbour on the side of the interval that reads back as v
    * (the lower half of the interval of a power of two is the narrower) */
@@ -151,26 +151,50 @@ int main(int argc, char **argv) {
   const char *env = getenv("SS_NUMBERS_COUNT");
   long count = env ? atol(env) : argc > 1 ? atol(argv[1]) : 200000;
 
-  /* the cached powers of ten, against glibc's correctly rounded strtold */
-  uint64_t f;
-  int e, k;
-  ASSERT_EQ_INT(api__pow10_cached(87, &f, &e), 0);
-  ASSERT_EQ_INT(api__pow10_cached(0, &f, &e), -348);
-  ASSERT_TRUE(f == 0xfa8fd5a0081c0288u && e == -1220);
-  ASSERT_EQ_INT(api__pow10_cached(86, &f, &e), 340);
-  ASSERT_TRUE(f == 0xaf87023b9bf0ee6bu && e == 1066);
-#if LDBL_MANT_DIG == 64
-  for (int i = 0; i < 87; i++) {
-    char s[16];
-    k = api__pow10_cached(i, &f, &e);
-    snprintf(s, sizeof s, "1e%d", k);
-    long double want = strtold(s, NULL), got = ldexpl((long double)f, e);
+  /* the powers of ten, against glibc's correctly rounded strtold and,
+   * where 10^k = 5^k 2^k has 5^k below 2^128, exactly */
+  uint64_t hi, lo;
+  int e;
+  ASSERT_TRUE(!api__pow10_g(-293, &hi, &lo, &e));
+  ASSERT_TRUE(!api__pow10_g(327, &hi, &lo, &e));
+  ASSERT_TRUE(api__pow10_g(-292, &hi, &lo, &e));
+  ASSERT_TRUE(hi == 0xff77b1fcbebcdc4fu && lo == 0x25e8e89c13bb0f7bu);
+  ASSERT_EQ_INT(e, -971);
+  ASSERT_TRUE(api__pow10_g(0, &hi, &lo, &e));
+  ASSERT_TRUE(hi == (uint64_t)1 << 63 && lo == 1 && e == 0);
+  unsigned __int128 five = 1;
+  for (int k = -292; k <= 326; k++) {
+    ASSERT_TRUE(api__pow10_g(k, &hi, &lo, &e));
     test_checks_++;
-    if (want != got || !(f >> 63))
-      TEST_FAIL_("10^%d: %016llx * 2^%d, strtold %La", k, (unsigned long long)f,
-                 e, want);
-  }
+    if (!(hi >> 63))
+      TEST_FAIL_("10^%d: %016llx%016llx not 128 bits", k,
+                 (unsigned long long)hi, (unsigned long long)lo);
+    /* floor: the table's value less one */
+    unsigned __int128 g = ((unsigned __int128)hi << 64 | lo) - 1;
+    if (k >= 0 && k <= 55) {
+      /* 5^k 2^k 2^(127 - e) = 5^k shifted left by 127 - e + k */
+      int sh = 127 - e + k, b = 0;
+      while (b < 128 && (five >> b) > 1)
+        b++;
+      test_checks_++;
+      if (sh < 0 || b + sh != 127 || g != five << sh)
+        TEST_FAIL_("10^%d: the table is not 5^%d shifted", k, k);
+      if (k < 55)
+        five *= 5;
+    }
+#if LDBL_MANT_DIG == 64
+    char s[16];
+    snprintf(s, sizeof s, "1e%d", k);
+    long double want = strtold(s, NULL),
+                got = ldexpl((long double)(uint64_t)(g >> 64) +
+                                 (long double)(uint64_t)((g >> 63) & 1),
+                             e - 63);
+    test_checks_++;
+    if (want != got)
+      TEST_FAIL_("10^%d: %016llx%016llx * 2^%d, strtold %La", k,
+                 (unsigned long long)hi, (unsigned long long)lo, e - 127, want);
 #endif
+  }
 
   /* the layout: printf's %g with 17 digits, and a whole number as x.0 */
   same(0.1, "0.1");
@@ -225,10 +249,8 @@ int main(int argc, char **argv) {
       check(v);
   }
   printf("%ld doubles: %ld in the fewest digits, the closest of them, %ld "
-         "not; Grisu3 unsure of %ld (glibc's digits used)\n",
-         st.n, st.exact, st.bad, st.fallback);
+         "not\n",
+         st.n, st.exact, st.bad);
   ASSERT_EQ_INT(st.bad, 0);
-  /* the fast path does the work: glibc only for the rare unsure case */
-  ASSERT_TRUE(st.fallback < st.n / 50);
   TEST_DONE();
 }
