@@ -2,10 +2,10 @@
  * shortest.c: a double in the fewest decimal digits that read back as the
  * same double (the closest to it when several of that length do), with
  * 64-bit integers: Schubfach (R. Giulietti, "The Schubfach way to render
- * doubles", 2020).  The decimals of one and two digits fewer than the
- * double's scale that lie in the interval reading back as it are found
- * from three products of 128 by 64 bits, rounded to odd, which the paper
- * proves exact enough to decide every case: no double needs a slower path.
+ * doubles", 2020).  Which decimals at the double's scale, and at ten times
+ * it, lie in the interval that reads back as the double is decided from
+ * three products of 128 by 64 bits, rounded to odd, which the paper proves
+ * exact enough for every case: no double needs a slower path.
  * tests/api/test_numbers.c checks it against glibc's correctly rounded
  * printf; bench/bench_numbers.c measures it against printf("%.17g").
  *
@@ -106,7 +106,8 @@ static void g_build(void) {
   }
 }
 
-/* floor(log2 10^k) and floor(log10 2^q), exact over the doubles' range. */
+/* floor(log2 10^k), over the table's range (test_numbers checks each
+ * against strtold); floor(log10 2^q) is inline in to_decimal. */
 static int floor_log2_pow10(int k) { return (k * 1741647) >> 19; }
 
 int api__pow10_g(int k, uint64_t *hi, uint64_t *lo, int *e) {
@@ -239,7 +240,8 @@ static int digits_of(uint64_t d, char *buf) {
   t[0] = (char)('0' + hi / 100000000);
   put8(t + 1, (uint32_t)(hi % 100000000));
   put8(t + 9, (uint32_t)(d % 100000000));
-  int n = (64 - __builtin_clzll(d)) * 1233 >> 12; /* floor or one less */
+  /* bits times log10(2): the count of digits or one less */
+  int n = (64 - __builtin_clzll(d)) * 1233 >> 12;
   n += n < 17 && d >= P10[n];
   memcpy(buf, t + 17 - n, (size_t)n);
   return n;
