@@ -5,10 +5,11 @@
 # /health while long computations keep every worker busy; and a /batch of
 # 2500 /orbit items against the same 2500 requests sent one by one on 2
 # connections; and what the daemon's CPU (from /proc) costs for an /orbit
-# from a guess, one /batch item or one request alone, against bench_orbit's
-# solve of the same orbit in the same run, with perf's split of the batch's
-# cycles by library, and by part (kernel, malloc and free, the rest of libc,
-# jansson, the computation, the codec and server) when perf is installed.
+# from a guess among many connections and alone, and for one /batch item,
+# against bench_orbit's solve of the same orbit in the same run, with perf's
+# split of the batch's cycles by library, and by part (kernel, malloc and
+# free, the rest of libc, jansson, the computation, the codec and server)
+# when perf is installed.
 # Usage: bench/load.sh [build-dir] [seconds] [connections]
 # Writes bench/results/load.md.  Installs wrk when run as root and missing.
 set -euo pipefail
@@ -48,7 +49,14 @@ out=bench/results/load.md
   echo "| endpoint | requests/s | p50 (ms) | p90 (ms) | p99 (ms) | max (ms) | non-2xx |"
   echo "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"
 } > "$out"
-declare -A rps
+# The daemon's CPU-seconds so far: the scheduler's run time of each of its
+# threads (the first field of /proc/PID/task/*/schedstat, in ns), exact where
+# utime and stime are sampled at clock ticks (10 ms: a batch's 0.3 s of CPU
+# read 0.25 or 0.31 s).  The daemon's threads live as long as it does.
+cpu() { cat /proc/"$pid"/task/*/schedstat | awk '{s += $1} END {printf "%.6f", s / 1e9}'; }
+# Microseconds of CPU per request between two cpu readings.
+per() { awk -v a="$1" -v b="$2" -v n="$3" 'BEGIN {printf "%.1f", (b - a) / n * 1e6}'; }
+declare -A rps many
 for name in health orbit_guess orbit_search simulate_100; do
   lua="$tmp/$name.lua"
   {
@@ -68,9 +76,12 @@ done = function(summary, latency, requests)
 end
 LUA
   } > "$lua"
+  c0=$(cpu)
   res=$(wrk -t1 -c"$conns" -d"${secs}s" -s "$lua" "$url${path[$name]}" | grep RESULT)
+  c1=$(cpu)
   read -r _ r p50 p90 p99 mx bad <<<"$res"
   rps[$name]=$r
+  many[$name]=$(per "$c0" "$c1" "$(awk -v r="$r" -v s="$secs" 'BEGIN {print r * s}')")
   echo "| $name (${path[$name]}) | $r | $p50 | $p90 | $p99 | $mx | $bad |" >> "$out"
   echo "$name: $res"
 done
@@ -108,14 +119,6 @@ long_rps=$(awk '/Requests\/sec/ {print $2}' "$tmp/long.out")
 } >> "$out"
 echo "health while saturated: $res"
 
-# The daemon's CPU-seconds so far: the scheduler's run time of each of its
-# threads (the first field of /proc/PID/task/*/schedstat, in ns), exact where
-# utime and stime are sampled at clock ticks (10 ms: a batch's 0.3 s of CPU
-# read 0.25 or 0.31 s).  The daemon's threads live as long as it does.
-cpu() { cat /proc/"$pid"/task/*/schedstat | awk '{s += $1} END {printf "%.6f", s / 1e9}'; }
-# Microseconds of CPU per request between two cpu readings.
-per() { awk -v a="$1" -v b="$2" -v n="$3" 'BEGIN {printf "%.1f", (b - a) / n * 1e6}'; }
-
 # A /batch of n /orbit items against the same n requests one by one on 2
 # keep-alive connections (curl --parallel --parallel-max 2, one process);
 # each way 5 times, the median.
@@ -148,7 +151,7 @@ for _ in 1 2 3 4 5; do
   t0=$(date +%s.%N)
   curl -s --no-progress-meter --parallel --parallel-max 2 -K "$tmp/each.cfg" > "$tmp/each.out"
   t1=$(date +%s.%N)
-  read -r good conns <<<"$(awk '$1 == 200 {g++} {c += $2} END {print g + 0, c + 0}' "$tmp/each.out")"
+  read -r good opened <<<"$(awk '$1 == 200 {g++} {c += $2} END {print g + 0, c + 0}' "$tmp/each.out")"
   [ "$good" = "$n" ] || { echo "one by one: $good of $n answered 200" >&2; exit 1; }
   dur=$(awk -v a="$t0" -v b="$t1" 'BEGIN {print b - a}')
   each_t+=("$dur")
@@ -168,13 +171,15 @@ et=$(median "${each_t[@]}")
   printf '| one `/batch` (%s bytes, NDJSON answer, `--batch-parallel` %s) | %.3f | %.0f |\n' \
     "$bytes" "$workers" "$bt" "$(awk -v t="$bt" -v n="$n" 'BEGIN {print n / t}')"
   printf '| %s separate requests, `curl --parallel-max 2` (%s connections opened) | %.3f | %.0f |\n' \
-    "$n" "$conns" "$et" "$(awk -v t="$et" -v n="$n" 'BEGIN {print n / t}')"
+    "$n" "$opened" "$et" "$(awk -v t="$et" -v n="$n" 'BEGIN {print n / t}')"
 } >> "$out"
 echo "batch: $bt s, one by one: $et s"
 
 # CPU per unit of work: the solve alone (bench_orbit, median CPU time), a
 # batch item (the 5 batches above), and one request at a time on one
-# connection (wrk -c1: nothing else in flight), /health for the HTTP alone.
+# connection (wrk -c1: nothing else in flight, so that each request wakes
+# the idle daemon), /health for the HTTP alone; and the same two in the first
+# table's runs, $conns connections, where the daemon is never idle.
 "$build/bench/bench_orbit" "$tmp" >/dev/null
 solve=$(awk -F'|' '/from a guess \(no finite/ {gsub(/[^0-9.]/, "", $4); print $4}' "$tmp/orbit.md")
 item_us=$(per 0 "$batch_cpu" $((5 * n)))
@@ -197,10 +202,12 @@ done
   echo "| work | daemon CPU (us) | solve (us) | ratio / excess |"
   echo "| --- | ---: | ---: | ---: |"
   awk -v i="$item_us" -v s="$solve" -v n="$n" 'BEGIN {printf "| a /batch item (%d /orbit items a batch, 5 batches) | %s | %s | %.2f times |\n", n, i, s, i / s}'
+  awk -v o="${many[orbit_guess]}" -v s="$solve" -v c="$conns" 'BEGIN {printf "| an /orbit from a guess among %d connections (the first table'"'"'s wrk) | %s | %s | +%.1f us |\n", c, o, s, o - s}'
+  echo "| a /health among $conns connections (the first table's wrk) | ${many[health]} | | |"
   awk -v o="${one[orbit_guess]}" -v s="$solve" 'BEGIN {printf "| one /orbit from a guess (wrk, 1 connection) | %s | %s | +%.1f us |\n", o, s, o - s}'
   echo "| one /health (wrk, 1 connection) | ${one[health]} | | |"
 } >> "$out"
-echo "cpu: batch item ${item_us} us, /orbit ${one[orbit_guess]} us, /health ${one[health]} us, solve ${solve} us"
+echo "cpu: batch item ${item_us} us, /orbit ${many[orbit_guess]} us (${one[orbit_guess]} alone), /health ${many[health]} us (${one[health]} alone), solve ${solve} us"
 
 # Where a batch's cycles go: perf over 3 batches, by library.
 if command -v perf >/dev/null && perf record -q -o "$tmp/perf.data" -p "$pid" -- sleep 0.1 2>/dev/null; then
