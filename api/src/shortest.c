@@ -188,12 +188,17 @@ static uint64_t to_decimal(double v, int *k) {
     d /= 100000000;
     *k += 8;
   }
-  for (int z = 4; z; z /= 2) {
-    uint64_t p = z == 4 ? 10000 : z == 2 ? 100 : 10;
-    if (d % p == 0) {
-      d /= p;
-      *k += z;
-    }
+  if (d % 10000 == 0) {
+    d /= 10000;
+    *k += 4;
+  }
+  if (d % 100 == 0) {
+    d /= 100;
+    *k += 2;
+  }
+  if (d % 10 == 0) {
+    d /= 10;
+    *k += 1;
   }
   return d;
 }
