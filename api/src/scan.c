@@ -73,8 +73,10 @@ static const char *number_end(const char *p, const char *end) {
     p++;
     if (p < end && (*p == '+' || *p == '-'))
       p++;
-    for (q = p; p < end && *p >= '0' && *p <= '9'; p++, n_exp++)
-      e = 10 * e + (*p - '0');
+    /* the value of the first 4 digits only: more are refused below */
+    for (; p < end && *p >= '0' && *p <= '9'; p++, n_exp++)
+      if (n_exp < 4)
+        e = 10 * e + (*p - '0');
     if (n_exp == 0 || n_exp > 3 || e >= 250)
       return NULL;
     real = 1;
