@@ -733,9 +733,11 @@ static int count_lines(const api_batch *b, size_t from, size_t to,
         memcmp(p + 6, id, idn) || memcmp(p + 6 + idn, head, (size_t)hn))
       return -1;
     p += 6 + idn + (size_t)hn;
-    int status = 0;
-    while (p < end && *p >= '0' && *p <= '9')
+    int status = 0, digits = 0; /* three, as HTTP's */
+    while (p < end && *p >= '0' && *p <= '9' && digits++ < 3)
       status = 10 * status + (*p++ - '0');
+    if (digits != 3 || (p < end && *p >= '0' && *p <= '9'))
+      return -1;
     if (status == 200)
       (*ok)++;
     else

@@ -324,6 +324,29 @@ static void test_batch_done_reads(void) {
   ASSERT_EQ_INT(api_job_run(j, 2, &in, &lim, NULL, &r), 500);
   api_response_free(&r);
   lens[1] += 3;
+  /* nor is one whose status has more than three digits (read without
+   * overflowing), or none */
+  const char *bad_status[] = {"20000000000000", "2000", ""};
+  for (size_t b = 0; b < sizeof bad_status / sizeof bad_status[0]; b++) {
+    char *kept = res[1];
+    size_t kept_len = lens[1], n = strlen(bad_status[b]);
+    size_t at_st = (size_t)(strstr(kept, "\"status\":") - kept) + 9;
+    char *t = malloc(kept_len + n + 1);
+    ASSERT_TRUE(t != NULL);
+    if (!t)
+      break;
+    memcpy(t, kept, at_st);
+    memcpy(t + at_st, bad_status[b], n);
+    memcpy(t + at_st + n, kept + at_st + 3, kept_len - at_st - 3);
+    t[kept_len - 3 + n] = 0;
+    res[1] = t;
+    lens[1] = kept_len - 3 + n;
+    ASSERT_EQ_INT(api_job_run(j, 2, &in, &lim, NULL, &r), 500);
+    api_response_free(&r);
+    res[1] = kept;
+    lens[1] = kept_len;
+    free(t);
+  }
   /* a store that cannot be read */
   f.fail = 1;
   ASSERT_EQ_INT(api_job_run(j, 2, &in, &lim, NULL, &r), 503);
