@@ -4,7 +4,14 @@
  *
  * Sockets.  One internal polling thread with epoll
  * (MHD_USE_EPOLL_INTERNAL_THREAD): an idle or slow connection costs a
- * socket, not a thread.  Its callbacks are request.c's (a request) and
+ * socket, not a thread.  libmicrohttpd's own loop, not one of the daemon's
+ * calling MHD_run: driven from outside, 0.9.75 keeps a connection whose
+ * read buffer is full and unprocessable (a chunk line longer than the
+ * buffer) on its list of ready connections, so its loop turns without
+ * waiting, at a full core, until that connection closes; and from outside
+ * the library such a connection cannot be told from an idle one once its
+ * socket holds no more bytes.  The internal loop answers it 500 instead
+ * (docs/howto/limits.md).  Its callbacks are request.c's (a request) and
  * monitor.c's (a connection); computations run in the pool (pool.c); a
  * monitor thread (monitor.c) watches the connections; jobs have their own
  * runners and ticker (jobs.c).
