@@ -17,6 +17,10 @@
 # Skipped (77) without dpkg-deb or cpack.
 # Usage: check_deb.sh SOURCE_DIR BUILD_DIR C_COMPILER CMAKE CPACK
 set -euo pipefail
+# grep -q at the end of a pipeline, reading all of its input: grep -q stops
+# at the first match, and under pipefail the writer then killed by SIGPIPE
+# fails the pipeline (a unit file's later lines, readelf's later entries)
+has_line() { grep "$@" >/dev/null; }
 src=$1 work=$2 cc=$3 cmake=$4 cpack=$5
 command -v dpkg-deb >/dev/null || { echo "dpkg-deb: not installed, skipped"; exit 77; }
 [ -x "$cpack" ] || command -v "$cpack" >/dev/null ||
@@ -61,7 +65,7 @@ for p in libstickslip0 libstickslip-dev stickslipd; do
   [ -n "$(field $p Description)" ] || fail "$p: no description"
 done
 has_dep() { # has_dep PACKAGE DEPENDENCY-PATTERN
-  field "$1" Depends | tr ',' '\n' | sed 's/^ *//' | grep -qx "$2" ||
+  field "$1" Depends | tr ',' '\n' | sed 's/^ *//' | has_line -x "$2" ||
     fail "$1 depends on '$(field "$1" Depends)', not on $2"
 }
 has_dep libstickslip0 'libgsl27 (>= .*)'
@@ -73,10 +77,10 @@ has_dep stickslipd 'libmicrohttpd12 (>= .*)'
 has_dep stickslipd 'libjansson4 (>= .*)'
 # the library's shlibs file and ldconfig trigger
 dpkg-deb -I "$(deb libstickslip0)" shlibs |
-  grep -qx "libstickslip $abi libstickslip0 (= $version-1)" ||
+  has_line -x "libstickslip $abi libstickslip0 (= $version-1)" ||
   fail "libstickslip0's shlibs: $(dpkg-deb -I "$(deb libstickslip0)" shlibs)"
 
-dpkg-deb -I "$(deb libstickslip0)" triggers | grep -qx 'activate-noawait ldconfig' ||
+dpkg-deb -I "$(deb libstickslip0)" triggers | has_line -x 'activate-noawait ldconfig' ||
   fail "libstickslip0 has no ldconfig trigger"
 
 # files: each where Debian puts it, in one package only
@@ -84,7 +88,7 @@ files() { dpkg-deb -c "$(deb "$1")" | awk '{print $6}' | sed 's|^\./|/|' | grep 
 has() { # has PACKAGE PATH...: PACKAGE holds each PATH
   local p=$1 f
   shift
-  for f in "$@"; do files "$p" | grep -qx "$f" || fail "$p lacks $f"; done
+  for f in "$@"; do files "$p" | has_line -x "$f" || fail "$p lacks $f"; done
 }
 lib=/usr/lib/$ma
 has libstickslip0 "$lib/libstickslip.so.$version" "$lib/libstickslip.so.$abi" \
@@ -100,7 +104,7 @@ dups=$(for p in libstickslip0 libstickslip-dev stickslipd; do files $p; done | s
 [ -z "$dups" ] || fail "in two packages: $dups"
 # the unit names the installed daemon
 dpkg-deb --fsys-tarfile "$(deb stickslipd)" |
-  tar -xO ./usr/lib/systemd/system/stickslipd.service | grep -qx 'ExecStart=/usr/bin/stickslipd.*' ||
+  tar -xO ./usr/lib/systemd/system/stickslipd.service | has_line -x 'ExecStart=/usr/bin/stickslipd.*' ||
   fail "the unit does not start /usr/bin/stickslipd"
 echo "deb: $(basename -a "${debs[@]}" | paste -sd' '): fields and files ok"
 
@@ -118,7 +122,7 @@ else
   else
     for d in $(for p in libstickslip0 libstickslip-dev stickslipd; do field $p Depends; done |
       tr ',' '\n' | sed 's/^ *\([^ ]*\).*/\1/' | sort -u | grep -v '^libstickslip'); do
-      dpkg-query -W -f='${Status}' "$d" 2>/dev/null | grep -q 'install ok installed' ||
+      dpkg-query -W -f='${Status}' "$d" 2>/dev/null | has_line 'install ok installed' ||
         fail "would not install here: $d is not installed"
     done
     echo "deb: their dependencies are installed here"
@@ -131,7 +135,7 @@ else
   dpkg "${own[@]}" -i "${debs[@]}" >"$tmp/dpkg.log" 2>&1 ||
     fail "dpkg -i into a root of its own: $(cat "$tmp/dpkg.log")"
   for p in libstickslip0 libstickslip-dev stickslipd; do
-    dpkg-query --admindir="$tmp/admin" -W -f='${Status}' $p | grep -q 'install ok installed' ||
+    dpkg-query --admindir="$tmp/admin" -W -f='${Status}' $p | has_line 'install ok installed' ||
       fail "$p: $(dpkg-query --admindir="$tmp/admin" -W -f='${Status}' $p)"
   done
   echo "deb: installed with dpkg -i into a root of their own (STICKSLIP_DISPOSABLE_MACHINE=1: here)"
@@ -145,7 +149,7 @@ fi
 "$cc" -o "$tmp/example" "$src/tests/example/example.c" \
   $(pkg-config --cflags --libs stickslip) \
   -Wl,-rpath,"$(pkg-config --variable=libdir stickslip)"
-readelf -d "$tmp/example" | grep -q "NEEDED.*libstickslip.so.$abi" ||
+readelf -d "$tmp/example" | has_line "NEEDED.*libstickslip.so.$abi" ||
   fail "the program does not use the shared library"
 out=$("$tmp/example")
 case $out in *"$want"*) ;; *) fail "the program printed: $out" ;; esac
@@ -157,7 +161,7 @@ health() { # health PORT: /health answers 200 (bash's /dev/tcp: no HTTP client n
   printf 'GET /health HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n' >&3
   timeout 5 cat <&3 >"$tmp/health"
   exec 3<&-
-  head -1 "$tmp/health" | grep -q '^HTTP/1.1 200' && grep -q '"status":"ok"' "$tmp/health"
+  head -1 "$tmp/health" | has_line '^HTTP/1.1 200' && grep -q '"status":"ok"' "$tmp/health"
 }
 if [ -z "$root" ] && [ -d /run/systemd/system ]; then
   systemctl start stickslipd

@@ -6,6 +6,10 @@
 # one, the daemon, its man page, the systemd unit, the user's guide).
 # Usage: check_install.sh BUILD_DIR SOURCE_DIR C_COMPILER CMAKE
 set -euo pipefail
+# grep -q at the end of a pipeline, reading all of its input: grep -q stops
+# at the first match, and under pipefail the writer then killed by SIGPIPE
+# fails the pipeline (a unit file's later lines, readelf's later entries)
+has_line() { grep "$@" >/dev/null; }
 build=$1 src=$2 cc=$3 cmake=$4
 want="slip 4.497497  overshoot 2.722666  stick 3.051267"
 tmp=$(mktemp -d)
@@ -33,7 +37,7 @@ runs() { # runs BINARY: it prints the orbit
   out=$("$@" 2>&1) || { echo "$1: $out"; return 1; }
   case $out in *"$want"*) ;; *) echo "$1 printed: $out"; return 1 ;; esac
 }
-needs_lib() { readelf -d "$1" | grep -q 'NEEDED.*libstickslip'; }
+needs_lib() { readelf -d "$1" | has_line 'NEEDED.*libstickslip'; }
 # a static-only installation: stickslip.pc needs --static (the libraries
 # libstickslip.a uses)
 kind=static static=--static
@@ -65,7 +69,7 @@ runs "$tmp/example_pc_static"
 # shellcheck disable=SC2046
 "$cc" -static -o "$tmp/example_static" "$src/tests/example/example.c" \
   $(pkg-config --static --cflags --libs stickslip)
-! readelf -d "$tmp/example_static" | grep -q NEEDED ||
+! readelf -d "$tmp/example_static" | has_line NEEDED ||
   { echo "pkg-config --static with -static linked a shared library"; exit 1; }
 runs "$tmp/example_static"
 echo "pkg-config: $(pkg-config --modversion stickslip), $kind; stickslip-static and --static -static: static"
