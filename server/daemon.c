@@ -131,16 +131,19 @@ static int port_free(const struct sockaddr_storage *ss) {
   return rc;
 }
 
-/* Enough descriptors for every connection the flags allow. */
-static void raise_fd_limit(unsigned max_conn) {
+/* Enough descriptors for every connection the flags allow, as far as the
+ * hard limit lets: the soft limit after, when it is still too few, else 0. */
+static unsigned long long raise_fd_limit(unsigned max_conn) {
   struct rlimit rl;
   if (getrlimit(RLIMIT_NOFILE, &rl) != 0)
-    return;
+    return 0;
   rlim_t want = (rlim_t)max_conn + 64;
   if (rl.rlim_cur < want) {
     rl.rlim_cur = rl.rlim_max < want ? rl.rlim_max : want;
-    setrlimit(RLIMIT_NOFILE, &rl);
+    if (setrlimit(RLIMIT_NOFILE, &rl) != 0 || getrlimit(RLIMIT_NOFILE, &rl))
+      return 1;
   }
+  return rl.rlim_cur < want ? (unsigned long long)rl.rlim_cur : 0;
 }
 
 static void daemon_free(struct srv_daemon *d) {
@@ -210,7 +213,7 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
     errno = EADDRINUSE;
     return NULL;
   }
-  raise_fd_limit(cfg->max_conn);
+  unsigned long long fds = raise_fd_limit(cfg->max_conn);
   /* the limits by address are srv__accept's (libmicrohttpd's own per-IP
    * limit knows no trusted proxy and no reserve).  Not libmicrohttpd's
    * strict mode: 0.9.75 answers a request without Host
@@ -249,6 +252,12 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
   /* after the line that tells the URL, which a supervisor reads first */
   if (!cfg->no_jobs && !d->jobs)
     fprintf(stderr, "stickslipd: out of memory for jobs: none are kept\n");
+  if (fds)
+    fprintf(stderr,
+            "stickslipd: the descriptor limit is %llu, too few for "
+            "--max-connections %u (%u wanted): raise the hard limit "
+            "(ulimit -Hn, LimitNOFILE=) or lower --max-connections\n",
+            fds, cfg->max_conn, cfg->max_conn + 64);
   srv__jobs_announce(d->jobs);
   fflush(stderr);
   return d;

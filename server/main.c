@@ -213,18 +213,23 @@ static void usage(FILE *f, const srv_config *defaults) {
              "allowed)");
   for (size_t i = 0; i < N_FLAGS; i++) {
     char help[512];
-    snprintf(help, sizeof help, "%s (%.10g)", FLAGS[i].help,
-             get_value(defaults, &FLAGS[i]));
+    double v = get_value(defaults, &FLAGS[i]);
+    /* a default outside the flag's range is one made at the start (the
+     * workers'), which the flag's text names */
+    if (v >= FLAGS[i].lo && v <= FLAGS[i].hi)
+      snprintf(help, sizeof help, "%s (%.10g)", FLAGS[i].help, v);
+    else
+      snprintf(help, sizeof help, "%s", FLAGS[i].help);
     usage_line(f, FLAGS[i].name, FLAGS[i].type == F_DOUBLE ? "X" : "N", help);
   }
   for (size_t i = 0; i < N_OPTIONS; i++)
     usage_line(f, OPTIONS[i].name, OPTIONS[i].arg, OPTIONS[i].help);
   fprintf(
-      f, "\nEvery option can also be set in the environment as STICKSLIP_ and\n"
-         "its name in capitals with underscores (STICKSLIP_MAX_SECONDS=30,\n"
-         "STICKSLIP_QUIET=1, STICKSLIP_TRUSTED_PROXY=ADDR[,ADDR...],\n"
-         "STICKSLIP_CORS_ORIGIN=ORIGIN[,ORIGIN...]); the\n"
-         "command line wins.\n"
+      f, "\nEvery option but --health-check, --version and --help can also be\n"
+         "set in the environment as STICKSLIP_ and its name in capitals with\n"
+         "underscores (STICKSLIP_MAX_SECONDS=30, STICKSLIP_QUIET=1,\n"
+         "STICKSLIP_TRUSTED_PROXY=ADDR[,ADDR...],\n"
+         "STICKSLIP_CORS_ORIGIN=ORIGIN[,ORIGIN...]); the command line wins.\n"
          "Exit status: 0 after SIGTERM or SIGINT, --help, --version; 1 when "
          "it cannot\nstart; 2 for a bad option; 3 when its port is taken.\n");
 }

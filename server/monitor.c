@@ -73,8 +73,8 @@ static int peer_port(struct MHD_Connection *c) {
   return 0;
 }
 
-/* An address may hold --per-ip-connections; once fewer than
- * --reserved-connections slots are free (of --max-connections, which
+/* An address may hold --per-ip-connections; once --reserved-connections
+ * or fewer slots are free (of --max-connections, which
  * libmicrohttpd enforces), only one holding fewer than
  * SRV__FEW_CONNECTIONS: two or three addresses that keep every slot they
  * can get leave the reserve to the others.  A trusted proxy speaks for

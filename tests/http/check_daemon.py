@@ -13,12 +13,16 @@
   help        every option the daemon parses (each "--..." literal of
               server/main.c) is in --help and in the man page's OPTIONS,
               and each of those names only options it parses; the man page
-              has EXAMPLES, EXIT STATUS and FILES.
+              has EXAMPLES, EXIT STATUS and FILES; each default --help
+              prints is a value its flag takes.
+  fd_limit    a hard descriptor limit too low for --max-connections is
+              said on stderr after the URL; one high enough is not.
 
 Usage: check_daemon.py STICKSLIPD CHECK
 """
 import os
 import re
+import resource
 import signal
 import socket
 import subprocess
@@ -35,13 +39,16 @@ def fail(msg):
     sys.exit("check_daemon: " + msg)
 
 
-def start(args, env=None):
+def start(args, env=None, fds=None):
     """The daemon started with @a args (on a free port unless they name
-    one), and the URL it prints when it listens."""
+    one), under a descriptor limit of @a fds when given, and the URL it
+    prints when it listens."""
+    def limit():
+        resource.setrlimit(resource.RLIMIT_NOFILE, (fds, fds))
     p = subprocess.Popen([DAEMON, "--quiet", "--no-jobs"] + args,
                          env=dict(os.environ, **(env or {})),
                          stderr=subprocess.PIPE, stdout=subprocess.DEVNULL,
-                         text=True)
+                         text=True, preexec_fn=limit if fds else None)
     line = p.stderr.readline()
     m = re.search(r"listening on (http://\S+)", line)
     if not m:
@@ -152,11 +159,46 @@ def check_help():
     for section in ("EXAMPLES", "EXIT STATUS", "FILES"):
         if ".SH " + section not in man:
             fail("the man page has no " + section)
-    print("help: %d options, each in --help and the man page" % len(parsed))
+    # each default --help prints is a value its flag takes
+    entries = re.split(r"^  (?=--)", q.stdout.split("\n\n", 2)[-1], flags=re.M)
+    defaults = {}
+    for e in entries:
+        m = re.match(r"(--[a-z-]+) [A-Z]+\s.*\(([-+0-9.e]+)\)\s*$", e, re.S)
+        if m:
+            defaults[m.group(1)] = m.group(2)
+    if len(defaults) < 25:
+        fail("only %d defaults found in --help" % len(defaults))
+    for flag, value in sorted(defaults.items()):
+        r = subprocess.run([DAEMON, flag, value, "--help"], capture_output=True,
+                           text=True, timeout=60)
+        if r.returncode != 0:
+            fail("--help gives %s the default %s, which it refuses: %s" %
+                 (flag, value, r.stderr.strip()))
+    print("help: %d options, each in --help and the man page; %d defaults, "
+          "each taken by its flag" % (len(parsed), len(defaults)))
+
+
+def check_fd_limit():
+    """Under a hard descriptor limit too low for --max-connections the
+    daemon serves, and says so after its URL, naming the way out; with
+    enough it says nothing."""
+    for fds, conns, said in ((300, 2048, True), (300, 200, False)):
+        p, url = start(["--port", "0", "--max-connections", str(conns)],
+                       fds=fds)
+        with urllib.request.urlopen(url + "/health", timeout=30) as r:
+            if r.status != 200:
+                fail("/health answered %d" % r.status)
+        rest = stop(p)
+        told = ("descriptor limit is %d, too few for --max-connections %d"
+                % (fds, conns)) in rest and "LimitNOFILE=" in rest
+        if told != said or ("descriptor limit" in rest) != said:
+            fail("limit %d, --max-connections %d: stderr %r" %
+                 (fds, conns, rest))
+    print("fd_limit: a limit too low is said, one high enough is not")
 
 
 CHECKS = {"notify": check_notify, "port_taken": check_port_taken,
-          "help": check_help}
+          "help": check_help, "fd_limit": check_fd_limit}
 
 
 def main():
