@@ -24,8 +24,8 @@
  * reached new jobs are answered 503 store-unavailable (with Retry-After);
  * synchronous requests do not touch it.  The work that grows with a body
  * (a submission's parse and its storing; a results request's job opened)
- * runs in the pool like a computation; the status, the list and the
- * dismissal are single store calls, made on the I/O thread.
+ * runs in the pool like a computation, and so do the status, the list and
+ * the dismissal: no call of the store is made on the I/O thread.
  */
 #define _GNU_SOURCE
 #include <stdio.h>

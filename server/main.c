@@ -372,6 +372,30 @@ static int default_store(srv_config *cfg) {
   return 0;
 }
 
+/* A bad value from the variable @a name: said after the option's own
+ * message, which names the option. */
+static int bad_variable(const char *name) {
+  fprintf(stderr, "stickslipd: (from %s)\n", name);
+  return -1;
+}
+
+/* A list of @a env's comma-separated items, each given to @a add; -1 when
+ * the list is longer than @a n - 1 bytes or an item is refused. */
+static int each_of(srv_config *cfg, const char *name, const char *env,
+                   char *list, size_t n,
+                   int (*add)(srv_config *, const char *)) {
+  if (strlen(env) >= n) {
+    fprintf(stderr, "stickslipd: %s is over %zu bytes\n", name, n - 1);
+    return -1;
+  }
+  snprintf(list, n, "%s", env);
+  for (char *save = NULL, *a = strtok_r(list, ",", &save); a;
+       a = strtok_r(NULL, ",", &save))
+    if (add(cfg, a))
+      return bad_variable(name);
+  return 0;
+}
+
 /* Every option from the environment (STICKSLIP_...), before the flags. */
 static int from_environment(srv_config *cfg) {
   char name[64];
@@ -380,10 +404,8 @@ static int from_environment(srv_config *cfg) {
   for (size_t k = 0; k < N_FLAGS; k++) {
     env_name(FLAGS[k].name, name, sizeof name);
     if ((env = getenv(name)) && *env) {
-      if (parse(&FLAGS[k], env, &x)) {
-        fprintf(stderr, "stickslipd: (from %s)\n", name);
-        return -1;
-      }
+      if (parse(&FLAGS[k], env, &x))
+        return bad_variable(name);
       set_value(cfg, &FLAGS[k], x);
     }
   }
@@ -398,30 +420,24 @@ static int from_environment(srv_config *cfg) {
     cfg->quiet = strcmp(env, "0") != 0;
   if ((env = getenv("STICKSLIP_NO_JOBS")) && *env)
     cfg->no_jobs = strcmp(env, "0") != 0;
-  if (((env = getenv("STICKSLIP_JOB_STORE")) && *env &&
-       set_text(cfg->job_store, sizeof cfg->job_store, "--job-store", env)) ||
-      ((env = getenv("STICKSLIP_STATE_DIR")) && *env &&
-       set_text(cfg->state_dir, sizeof cfg->state_dir, "--state-dir", env)))
-    return -1;
+  if ((env = getenv("STICKSLIP_JOB_STORE")) && *env &&
+      set_text(cfg->job_store, sizeof cfg->job_store, "--job-store", env))
+    return bad_variable("STICKSLIP_JOB_STORE");
+  if ((env = getenv("STICKSLIP_STATE_DIR")) && *env &&
+      set_text(cfg->state_dir, sizeof cfg->state_dir, "--state-dir", env))
+    return bad_variable("STICKSLIP_STATE_DIR");
   if ((env = getenv("STICKSLIP_LOG_FORMAT")) && *env &&
       set_log_format(cfg, env))
+    return bad_variable("STICKSLIP_LOG_FORMAT");
+  char proxies[1024], origins[2048];
+  if ((env = getenv("STICKSLIP_TRUSTED_PROXY")) && *env &&
+      each_of(cfg, "STICKSLIP_TRUSTED_PROXY", env, proxies, sizeof proxies,
+              add_proxy))
     return -1;
-  if ((env = getenv("STICKSLIP_TRUSTED_PROXY")) && *env) {
-    char list[1024];
-    snprintf(list, sizeof list, "%s", env);
-    for (char *save = NULL, *a = strtok_r(list, ",", &save); a;
-         a = strtok_r(NULL, ",", &save))
-      if (add_proxy(cfg, a))
-        return -1;
-  }
-  if ((env = getenv("STICKSLIP_CORS_ORIGIN")) && *env) {
-    char list[2048];
-    snprintf(list, sizeof list, "%s", env);
-    for (char *save = NULL, *a = strtok_r(list, ",", &save); a;
-         a = strtok_r(NULL, ",", &save))
-      if (add_origin(cfg, a))
-        return -1;
-  }
+  if ((env = getenv("STICKSLIP_CORS_ORIGIN")) && *env &&
+      each_of(cfg, "STICKSLIP_CORS_ORIGIN", env, origins, sizeof origins,
+              add_origin))
+    return -1;
   return 0;
 }
 

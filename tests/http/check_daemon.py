@@ -17,6 +17,8 @@
               prints is a value its flag takes.
   fd_limit    a hard descriptor limit too low for --max-connections is
               said on stderr after the URL; one high enough is not.
+  environment a bad value in a STICKSLIP_ variable stops the daemon with
+              exit 2 and a message naming the variable.
 
 Usage: check_daemon.py STICKSLIPD CHECK
 """
@@ -197,8 +199,36 @@ def check_fd_limit():
     print("fd_limit: a limit too low is said, one high enough is not")
 
 
+def check_environment():
+    """A bad value in a variable stops the daemon (exit 2, as a bad option)
+    with a message that names the variable: a number, a text, a list item,
+    a list too long to hold."""
+    bad = {"STICKSLIP_MAX_SECONDS": "-1",
+           "STICKSLIP_LOG_FORMAT": "xml",
+           "STICKSLIP_JOB_STORE": "x" * 5000,
+           "STICKSLIP_STATE_DIR": "x" * 5000,
+           "STICKSLIP_TRUSTED_PROXY": "10.0.0.1,nonsense",
+           "STICKSLIP_CORS_ORIGIN": "http://a:3000,not-an-origin"}
+    # a list longer than the daemon holds is refused, not cut (a cut could
+    # leave 10.0.0.1 of 10.0.0.12)
+    long_list = ",".join(["10.0.0.12"] * 120)
+    cases = list(bad.items()) + [("STICKSLIP_TRUSTED_PROXY", long_list)]
+    for name, value in cases:
+        env = {k: v for k, v in os.environ.items()
+               if not k.startswith("STICKSLIP_")}
+        env[name] = value
+        r = subprocess.run([DAEMON, "--port", "0", "--no-jobs"], env=env,
+                           capture_output=True, text=True, timeout=60)
+        if r.returncode != 2 or name not in r.stderr:
+            fail("%s=%s...: exit %d, %r" % (name, value[:20], r.returncode,
+                                            r.stderr))
+    print("environment: %d bad values, each refused naming its variable" %
+          len(cases))
+
+
 CHECKS = {"notify": check_notify, "port_taken": check_port_taken,
-          "help": check_help, "fd_limit": check_fd_limit}
+          "help": check_help, "fd_limit": check_fd_limit,
+          "environment": check_environment}
 
 
 def main():
