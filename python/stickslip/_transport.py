@@ -2,13 +2,14 @@
 
 A request is retried when asking again can help and cannot hurt:
 - a 503 that carries Retry-After (a full queue, a spent memory budget, a
-  drain), after the delay the daemon asks for, on every call: the daemon
-  refused the request before computing anything;
+  drain), after the delay the daemon asks for (at most 30 s), on every
+  call: the daemon refused the request before computing anything;
 - a network error (refused, reset, timed out, an answer cut short) on an
   idempotent call only, after 0.1, 0.2, 0.4 ... s (at most 2 s); a call
   that is not idempotent (one that creates a job) is retried only when
   the connection was refused, since then nothing was sent.
-Both are bounded by ``retries`` attempts after the first.
+Both, and the asking again of an answer cut short (Client), share one
+bound: ``retries`` attempts after the first, for the whole call.
 """
 
 from __future__ import annotations
@@ -36,6 +37,8 @@ class Answer:
                  resp: http.client.HTTPResponse) -> None:
         self._conn = conn
         self._resp = resp
+        # the attempts made before this one (Transport.open's ``first``)
+        self.attempt = 0
         self.status = resp.status
         self.headers = resp.headers
 
@@ -115,14 +118,16 @@ class Transport:
 
     def open(self, method: str, path: str, body: Optional[bytes] = None,
              headers: Optional[Mapping[str, str]] = None,
-             idempotent: bool = True) -> Answer:
+             idempotent: bool = True, first: int = 0) -> Answer:
         """Send a request and return its answer once its status is 2xx or
-        3xx; a problem answer is raised as its ProblemError."""
+        3xx; a problem answer is raised as its ProblemError.  ``first``:
+        the attempts of this call already made (a request asked again
+        because its answer was cut short), counted against ``retries``."""
         h = {"User-Agent": USER_AGENT, "Accept-Encoding": "identity"}
         if body is not None:
             h["Content-Type"] = "application/json"
         h.update(headers or {})
-        attempt = 0
+        attempt = first
         while True:
             conn = self._connect()
             try:
@@ -143,7 +148,9 @@ class Transport:
                 raise TransportError("%s %s%s: %s" % (method, self.url, path,
                                                       e)) from e
             if resp.status < 400:
-                return Answer(conn, resp)
+                ans = Answer(conn, resp)
+                ans.attempt = attempt
+                return ans
             exc = self._problem(conn, resp)
             if retryable(exc.status) and exc.retry_after is not None \
                     and attempt < self.retries:

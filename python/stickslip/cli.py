@@ -1,7 +1,7 @@
 """A command line for quick looks from a shell:
 
-    python -m stickslip orbit --chi 0.2 --eta 4 --us 0.0724 --ur 0.6178 \\
-        --V 1 --kind overshoot [--format json|table] [--url URL]
+    python -m stickslip [--url URL] orbit --chi 0.2 --eta 4 --us 0.0724 \\
+        --ur 0.6178 --V 1 --kind overshoot [--format json|table]
     python -m stickslip simulate --chi 0.2 ... --initial X1 X2 V1 V2 \\
         --t-end 10
     python -m stickslip version | health

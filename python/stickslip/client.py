@@ -1,4 +1,7 @@
-"""The client: one method per endpoint of stickslipd.
+"""The client: one method per computing endpoint of stickslipd, and for
+/health, /version and /metrics; jobs through ``submit`` (a ``Job``), any
+other resource (GET /jobs, a problem's page) through ``open`` and
+``request``.
 
 Each computing method takes the request's fields as keyword arguments, with
 the names of the JSON contract (api/openapi.json), or one dict, or both (the
@@ -61,9 +64,11 @@ class Client:
 
     ``timeout``: seconds to wait for the connection and for each read (a
     computation answers when it is done: allow for ``--max-seconds``);
-    ``retries``: attempts after the first, for a 503 with Retry-After and
-    for network errors on idempotent calls (every call but ``submit``: the
-    computing endpoints have no effect but their answer)."""
+    ``retries``: attempts after the first, for the whole of a call: for a
+    503 with Retry-After, for network errors on idempotent calls (every
+    call but ``submit`` and the ``/batch`` cuts of ``sweep``: the computing
+    endpoints have no effect but their answer), and for an answer cut
+    short."""
 
     def __init__(self, url: str = "http://127.0.0.1:8080",
                  timeout: float = 60.0, retries: int = 3) -> None:
@@ -92,13 +97,16 @@ class Client:
                 headers: Optional[Mapping[str, str]] = None) -> Any:
         """Any idempotent request whose answer is one JSON document; an
         answer cut short is asked again, as a network error is."""
+        data = body if isinstance(body, bytes) or body is None \
+            else encode(body)
         attempt = 0
         while True:
-            ans = self.open(method, path, body, headers)
+            ans = self._t.open(method, path, data, headers, first=attempt)
+            attempt = ans.attempt
             try:
                 return ans.json()
             except TransportError:
-                if attempt == self._t.retries:
+                if attempt >= self._t.retries:
                     raise
                 self._t.backoff(attempt)
                 attempt += 1
@@ -157,9 +165,11 @@ class Client:
 
         def lines() -> Iterator[JSON]:
             ans: Optional[Answer] = first
-            for attempt in range(self._t.retries + 1):
+            attempt = first.attempt
+            while True:
                 if ans is None:
-                    ans = self._t.open("POST", "/map", data)
+                    ans = self._t.open("POST", "/map", data, first=attempt)
+                    attempt = ans.attempt
                 try:
                     for line in ans.lines():
                         if line.get("done") is True:
@@ -171,8 +181,9 @@ class Client:
                             yield line
                     raise TransportError("the map ended before its last line")
                 except TransportError:
-                    if attempt == self._t.retries:
+                    if attempt >= self._t.retries:
                         raise
+                attempt += 1
                 ans = None
 
         return Lines(lines(), lambda line: tuple(line["index"]))
@@ -208,15 +219,19 @@ class Client:
                      left: List[int], ans: Optional[Answer]) -> Iterator[JSON]:
         seconds = 0.0
         counts = {"ok": 0, "failed": 0}
-        for attempt in range(self._t.retries + 1):
+        attempt = ans.attempt if ans is not None else 0
+        asked_again = False
+        while True:
             if ans is None:
-                ans = self._t.open("POST", "/batch", encoded(left))
+                ans = self._t.open("POST", "/batch", encoded(left),
+                                   first=attempt)
+                attempt = ans.attempt
             got: Set[int] = set()
             try:
                 for line in ans.lines():
                     if line.get("done") is True:
                         seconds += float(line.get("seconds", 0.0))
-                        if attempt == 0:
+                        if not asked_again:
                             yield line
                         else:
                             yield dict(line, seconds=seconds, **counts)
@@ -227,8 +242,10 @@ class Client:
                     yield line
                 raise TransportError("the batch ended before its last line")
             except TransportError:
-                if attempt == self._t.retries:
+                if attempt >= self._t.retries:
                     raise
+            attempt += 1
+            asked_again = True
             left = [i for i in left if i not in got]
             ans = None
 

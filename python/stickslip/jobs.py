@@ -106,7 +106,7 @@ class Job:
         drops), or the one document of a single answer."""
         from .client import Lines
         if self._answer is not None:
-            return Lines(self._stored(), lambda line: 0)
+            return Lines(self._stored(), lambda line: line.get("index", 0))
         return Lines(self._stream(), lambda line: line.get("index", 0))
 
     def _stored(self) -> Iterator[JSON]:

@@ -1,6 +1,7 @@
 """Sweeps: many requests of one path, cut under the daemon's limits and
 run as /batch jobs (or batches when the daemon runs no jobs), each result
-written to a journal as it arrives.
+written to a journal as it arrives (but an item still refused 503 after
+the client's retries: returned, and sent again by the next call).
 
     results = client.sweep(bodies, path="/orbit", journal="sweep.jsonl")
 
@@ -25,7 +26,7 @@ cut after a second, the daemon's Retry-After, up to the client's retries.
 
 The journal (JSON lines: a header naming the path, then one result a line,
 with a hash of the request, and a line for each job naming its items) is
-appended to and flushed as each result arrives; a second call with the
+appended to and flushed as each result arrives (503s aside); a second call with the
 same journal sends only the items whose results it lacks, or whose body has
 changed, and ignores a last line torn by an interruption.  A job goes on at
 the daemon when its sweep is interrupted: the second call reads the results

@@ -144,6 +144,16 @@ def test_daemon_without_jobs_answers_at_once(
     assert [x["status"] for x in lines] == [200] and lines.done is not None
 
 
+def test_synchronous_batch_gathered_by_index() -> None:
+    """A /batch answered at once (a daemon without jobs) is gathered in the
+    order of its items, whatever order they finished in."""
+    shuffled = [LINES[2], LINES[0], LINES[3], LINES[1], LINES[4]]
+    with FakeServer({("POST", "/batch"): lambda _: shuffled}) as fake:
+        job = stickslip.Client(fake.url).submit("/batch", requests=[])
+        assert job.id is None
+        assert [x["index"] for x in job.results().gather()] == [0, 1, 2, 3]
+
+
 # the stick -> slip point of the paper's orbit; a motion from it to this
 # t_end takes a few hundredths of a second
 X0 = [1.2739277342427062, 4.3629277342427093, -0.80748713672430694, 1.0]

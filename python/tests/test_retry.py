@@ -135,6 +135,30 @@ def test_503_waits_the_headers_delay() -> None:
             assert len(fake.log) == len(want) + 1, delays
 
 
+def test_retries_bound_the_whole_call() -> None:
+    """``retries`` bounds every attempt of a call: 503s refused before the
+    answer and answers cut inside their body share it (each ask again does
+    not start a count of its own)."""
+    served: List[int] = []
+
+    def health(_: Any) -> Any:
+        served.append(1)
+        if len(served) % 2:
+            return (503, {"Content-Type": "application/problem+json",
+                          "Retry-After": "0"}, OVERLOADED)
+        return (200, {"X-Cut": "5", "Content-Type": "application/json"},
+                b'{"status":"ok"}')
+
+    for retries in (0, 1, 2, 5):
+        served.clear()
+        with FakeServer({("GET", "/health"): health}) as fake:
+            c = stickslip.Client(fake.url, retries=retries)
+            c._t.sleep = lambda _: None
+            with pytest.raises(stickslip.StickslipError):
+                c.health()
+            assert len(served) == retries + 1, retries
+
+
 class Hangup:
     """A server that reads each request whole and closes the connection
     without answering (a daemon that died mid-request, a proxy's reset):
