@@ -249,10 +249,12 @@ SS_API double ss_stick_force(const ss_model *m, const double x[4]);
  * The mode a state starts in.  The rule, which also decides every transition
  * at the end of a slip or overshoot phase:
  *
- * - x2' < V: slip; x2' > V: overshoot (exact comparisons);
+ * - x2' < V: slip; x2' > V: overshoot (an x2' within 4 DBL_EPSILON V of V
+ *   is taken as V);
  * - x2' = V and chi |x2 - x1| < ur: stick;
  * - x2' = V and chi (x2 - x1) > ur: slip; < -ur: overshoot;
- * - x2' = V and chi |x2 - x1| = ur exactly (the threshold): the static
+ * - x2' = V and chi |x2 - x1| = ur (the threshold, within the event
+ *   finder's tolerance, 16 DBL_EPSILON of the force's scale): the static
  *   friction can still hold (the stick set is closed), so the state sticks if
  *   the stick force moves back inside (its first non-zero derivative under
  *   the stick motion points inward, or all vanish) and slips to the side
@@ -340,10 +342,12 @@ SS_API void ss_trig_eval(const ss_trig *g, double t, int order, double *out);
  * root (SS_OK, *t = t0).
  *
  * @param tmax     search horizon, > t0
- * @param[out] t   the root or tangency; tmax on SS_HORIZON
+ * @param[out] t   the root or tangency; tmax on SS_HORIZON; INFINITY on
+ *                 SS_NEVER; the last point reached on SS_ENOCONV
  * @return SS_OK (crossing), SS_GRAZING (tangency), SS_HORIZON (g < 0 on
  *         (t0, tmax]), SS_NEVER (c1 <= 0 and c0 + c1 t0 + sum |terms| <
- *         -tol: g can never reach zero), SS_ABOVE (g is positive at t0
+ *         -tol: g can never reach zero), SS_ENOCONV (no root located in
+ *         2e6 steps of the bracket search), SS_ABOVE (g is positive at t0
  *         beyond tol: there is no first crossing from below), SS_EINVAL
  *         (bad arguments: NULL, n outside 0..SS_TRIG_MAX, t0 not finite,
  *         tmax not above t0, a coefficient or frequency not finite).
@@ -567,8 +571,10 @@ SS_API ss_orbit_kind ss_orbit_kind_of(int n, const ss_mode *modes);
 
 /** How the search found an orbit. */
 typedef enum ss_orbit_source {
-  SS_SOURCE_GUESS = 0,         /**< from the caller's guess */
-  SS_SOURCE_SIMULATION = 1,    /**< simulation settled on it (an attractor) */
+  SS_SOURCE_GUESS = 0, /**< from the caller's guess */
+  /** from a simulation: the orbit it settled on (an attractor), or Newton
+   *  from a close return of one that did not settle (of any stability) */
+  SS_SOURCE_SIMULATION = 1,
   SS_SOURCE_DURATION_GRID = 2, /**< Newton on the durations from a grid */
   SS_SOURCE_MAP_NEWTON = 3,    /**< Newton on the Poincare map P^k */
   SS_SOURCE_CERTIFICATE = 4    /**< a root the certificate proved (one the
@@ -683,7 +689,8 @@ typedef struct ss_orbit {
 
 /** Options of ss_orbit_find(); zero-initialise for the defaults. */
 typedef struct ss_orbit_opts {
-  unsigned kinds; /**< mask of ss_orbit_kind; 0 means all */
+  unsigned kinds; /**< mask of ss_orbit_kind; 0 means all (a guess's orbit
+                       is returned whatever its kind) */
   int n_guess;    /**< > 0: start from this guess only (<= SS_MAX_PHASES) */
   /** The guess's sequence.  One that does not start with slip and end with
    *  stick stands for slip, overshoot, stick (3 phases) or slip, stick (2). */
@@ -869,7 +876,8 @@ SS_API int ss_orbit_find(const ss_model *m, const ss_orbit_opts *opts,
  * @param max_events   give up after this many events (SS_ELIMIT_EVENTS)
  * @param[out] out     the point reached, (z1, z1')
  * @param[out] modes, durations, n_phases  the sequence travelled (may be NULL;
- *                     room for SS_MAX_PHASES phases, more is
+ *                     modes and durations are written only when both are
+ *                     given; room for SS_MAX_PHASES phases, more is
  *                     SS_ELIMIT_EVENTS)
  * @return SS_OK, SS_ELIMIT_EVENTS, SS_HORIZON (perpetual slip), or a failure
  *         (SS_EINVAL for a start that is not finite).  Thread-safe.
@@ -1087,7 +1095,8 @@ typedef struct ss_attractor {
   double period;      /**< its period */
   int n_phases;       /**< phases per period (may exceed SS_MAX_PHASES) */
   int n_overshoot;    /**< overshoot phases per period */
-  ss_mode modes[SS_MAX_PHASES];    /**< the first min(n_phases, 16) modes */
+  ss_mode modes[SS_MAX_PHASES];    /**< the first min(n_phases,
+                                        SS_MAX_PHASES) modes */
   double durations[SS_MAX_PHASES]; /**< and their durations */
   double s[2];                     /**< a point of it on Sigma0, (z1, z1') */
   int turns_run;                   /**< returns simulated to find it */
@@ -1096,9 +1105,11 @@ typedef struct ss_attractor {
 /**
  * Simulate from (z1, z1') = @a s0 on Sigma0, return by return, and find
  * the periodic attractor the motion settles on: the smallest k <= max_period
- * with |P^k(s) - s| < 1e-9 (1 + |s|) at two successive returns, after at
- * least 20 returns, within max_turns returns.
- * @return SS_OK (a->found says whether one was found); SS_EINVAL; a failure
+ * with each component of P^k(s) - s within 1e-9 (1 + |s0| + |s1|) at two
+ * successive returns, looked for from the 21st return on, within max_turns
+ * returns.
+ * @return SS_OK (a->found says whether one was found); SS_EINVAL (a NULL,
+ *         max_turns < 1, max_period outside 1..256); SS_ENOMEM; a failure
  *         of the simulation.  Thread-safe.
  */
 SS_API int ss_attractor_from(const ss_model *m, const double s0[2],
@@ -1111,7 +1122,7 @@ SS_API int ss_attractor_from(const ss_model *m, const double s0[2],
  * family does not exist (*value), the attractor simulation reaches
  * (ss_attractor_from, 5000 returns, periods up to 64 returns).
  * @return SS_OK; SS_EINVAL (@a g is not a grazing that ends @a b, or @a b
- *         is a family in a physical parameter).
+ *         is a family in a physical parameter); or as ss_attractor_from().
  */
 SS_API int ss_beyond_grazing(const ss_params *p, const ss_branch *b,
                              const ss_special *g, double *value,
@@ -1120,14 +1131,17 @@ SS_API int ss_beyond_grazing(const ss_params *p, const ss_branch *b,
 /**
  * The family on the other side of the grazing @a g that ends the family
  * @a b (continued with @a o from parameters @a p): the adjacent sequence,
- * a stick of zero length inserted after the phase whose switching margin
- * reaches zero, solved 1e-4 (relative) past the located value and, when
- * that orbit is feasible, continued with @a o (its modes in out->modes).
+ * a short stick inserted after the phase whose switching margin reaches
+ * zero, or, for a margin's maximum inside a phase, that phase split there
+ * by a short phase of the mode the margin's zero would start (the new
+ * phase 1e-3 of the period at the start), solved 1e-4 (relative) past the
+ * located value and, when that orbit is feasible, continued with @a o (its
+ * modes in out->modes).
  * @return SS_OK (@a out is the adjacent family); SS_INFEASIBLE (no
  *         feasible orbit of the adjacent sequence there: @a d says why, the
  *         family ends at the grazing; out->modes holds the sequence tried);
- *         SS_EINVAL (not a grazing of the switching condition that ends
- *         @a b); or as ss_continue().  Release @a out with ss_branch_free().
+ *         SS_EINVAL (not such a grazing that ends @a b); or as
+ *         ss_continue().  Release @a out with ss_branch_free().
  */
 SS_API int ss_continue_adjacent(const ss_params *p, const ss_branch *b,
                                 const ss_special *g, const ss_cont_opts *o,
@@ -1162,9 +1176,10 @@ typedef struct ss_curve {
  * o2->param, moves over [o2->lo, o2->hi] (o2's direction and physical are
  * not read): pseudo-arclength on the duration equations and the grazing's
  * equation, in (durations, p1, p2).  At every point the orbit solved 1e-7
- * (relative) either side in p1 is feasible on one side only, or the curve
- * ends.  A grazing of the switching condition at the end of a slip or
- * overshoot (SS_MARGIN_SWITCHING), of a phase's end
+ * (relative) either side in p1 (1e-5 for a grazing of a phase's end, ten
+ * or a hundred times that where neither side is feasible) is feasible on
+ * one side only, or the curve ends.  A grazing of the switching condition at
+ * the end of a slip or overshoot (SS_MARGIN_SWITCHING), of a phase's end
  * (SS_MARGIN_TRANSVERSALITY) or of a margin's maximum inside a phase can
  * be followed.
  * @return SS_OK; SS_EINVAL (bad options, another kind of special point or
@@ -1351,7 +1366,9 @@ typedef struct ss_map_opts {
    *  dimensionless). */
   const ss_physical *physical;
   double max_seconds; /**< time budget (0: none) */
-  /** Polled between cells: a non-zero answer stops with SS_ECANCELED. */
+  /** Polled between cells and within each cell's search, on the worker
+   *  threads and possibly at once (it must be thread-safe: an atomic flag
+   *  read); a non-zero answer stops with SS_ECANCELED. */
   int (*cancelled)(void *cls);
   void *cancel_cls;
   /** Non-NULL: full searches made already, apart (a map made in pieces:
@@ -1401,7 +1418,7 @@ SS_API int ss_map_params(const ss_params *p, const ss_map_opts *opts,
  * @return SS_OK; SS_EINVAL (bad axes or options); SS_EDOMAIN (a cell's
  *         parameters are out of range: @a d says which); SS_ELIMIT_TIME or
  *         SS_ECANCELED (the cells done hold what was found); SS_ENOMEM.
- *         Thread-safe (the cancel hook aside).
+ *         Thread-safe when the cancel hook is.
  */
 SS_API int ss_map_run(const ss_params *p, int n_axes, const ss_map_axis *axes,
                       const ss_map_opts *opts, ss_map *map, ss_diag *d);
@@ -1481,7 +1498,10 @@ typedef struct ss_basin_opts {
                         (0: 500) */
   int threads;     /**< the cells are simulated on this many threads (0: 1) */
   double max_seconds; /**< time budget (0: none) */
-  /** Polled between rows: a non-zero answer stops with SS_ECANCELED. */
+  /** Polled between rows, within each cell's motion (every 256 events)
+   *  and within the search for attractors, on the worker threads (it must
+   *  be thread-safe: an atomic flag read); a non-zero answer stops with
+   *  SS_ECANCELED. */
   int (*cancelled)(void *cls);
   void *cancel_cls;
 } ss_basin_opts;

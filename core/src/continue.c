@@ -763,8 +763,12 @@ static int cont_setup(cont *c, const ss_params *p, const ss_cont_opts *opts,
     c->ph = *opts->physical;
     c->pid = opts->phys;
     *v0 = *ss__phys_ref(&c->ph, c->pid);
-    if (ss_params_from_physical(&c->ph, &c->p, NULL, d) != SS_OK)
-      return ss__fail(d, SS_EINVAL, "physical", 0, "bad physical parameters");
+    if (ss_params_from_physical(&c->ph, &c->p, NULL, d) != SS_OK) {
+      /* d says which value and why; the status is the options' */
+      if (d)
+        d->status = SS_EINVAL;
+      return SS_EINVAL;
+    }
   } else {
     *v0 = *ss__param_ref(&c->p, c->id);
   }
@@ -829,6 +833,8 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
                     b->end, &leg_rc) != SS_OK)
     return ss__fail(d, SS_ENOMEM, "points", 0, "out of memory");
   b->points = points;
+  if (leg_rc == SS_ENOMEM)
+    return ss__fail(d, SS_ENOMEM, "points", 0, "out of memory");
   if (leg_rc != SS_OK)
     return ss__fail(d, leg_rc, "max_seconds", c.clock.budget, "%s",
                     leg_rc == SS_ECANCELED ? "the continuation was cancelled"

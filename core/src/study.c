@@ -62,9 +62,13 @@ static int study_period2(const ss_params *p, const ss_study_opts *o,
     ss_diag_clear(&d);
     ss_branch *b2 = &s->branches[s->n_branches];
     int rc = ss_continue_period2(p, &s->family, pd, &o->family, b2, &d);
-    if (rc == SS_OK) {
+    /* a family stopped by the time budget or a cancel is kept: the caller
+     * is promised what was found */
+    if (rc == SS_OK || (rc != SS_ENOMEM && stops(rc) && b2->n_points > 0)) {
       s->of_special[s->n_branches++] = i;
-      continue;
+      if (rc == SS_OK)
+        continue;
+      return rc;
     }
     ss_branch_free(b2);
     if (stops(rc))
@@ -93,7 +97,9 @@ static int study_beyond(const ss_params *p, const ss_study_opts *o,
     by->adjacent_n_phases = adj.n_phases;
     memcpy(by->adjacent_modes, adj.modes, sizeof adj.modes);
     snprintf(by->adjacent_why, sizeof by->adjacent_why, "%s", d.text);
-    if (rc == SS_OK && o->branch_switching && s->n_branches < SS_MAX_SPECIAL) {
+    int found =
+        rc == SS_OK || (rc != SS_ENOMEM && stops(rc) && adj.n_points > 0);
+    if (found && o->branch_switching && s->n_branches < SS_MAX_SPECIAL) {
       s->branches[s->n_branches] = adj;
       s->of_special[s->n_branches++] = i;
     } else {

@@ -4,6 +4,7 @@
  * attractor the motion settles on and the family of the adjacent sequence.
  */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "continue.h"
@@ -181,11 +182,18 @@ int ss_continue_adjacent(const ss_params *p, const ss_branch *b,
     return rc;
   rc = ss_orbit_solve(&m, guess.n_phases, guess.modes, guess.durations, NULL,
                       &start, d);
+  if (rc == SS_ENOCONV || rc == SS_ESINGULAR) {
+    /* the solver's words kept, under the status returned */
+    char why[sizeof d->text] = "";
+    if (d)
+      snprintf(why, sizeof why, "%s", d->text);
+    ss_diag_clear(d);
+    return ss__fail(d, SS_INFEASIBLE, "special", g->value,
+                    "the adjacent sequence has no orbit past the grazing "
+                    "(%.200s)",
+                    why);
+  }
   if (rc != SS_OK)
-    return rc == SS_ENOCONV || rc == SS_ESINGULAR
-               ? ss__fail(d, SS_INFEASIBLE, "special", g->value,
-                          "the adjacent sequence has no orbit past the "
-                          "grazing")
-               : rc;
+    return rc;
   return ss_continue(&past, &start, o, out, d);
 }

@@ -500,6 +500,8 @@ static void check_beyond(const ss_params *p, ss_param_id id, double lo,
     ss_diag d;
     ss_diag_clear(&d);
     ASSERT_EQ_INT(ss_continue_adjacent(p, &b, g, &co, &adj, &d), SS_INFEASIBLE);
+    /* d records the status returned */
+    ASSERT_EQ_INT(d.status, SS_INFEASIBLE);
     ASSERT_EQ_INT(adj.n_phases, b.n_phases + 1);
     ASSERT_EQ_INT((int)adj.modes[g->at.min_margin.phase + 1],
                   (int)SS_MODE_STICK);
@@ -799,6 +801,18 @@ static void test_physical(void) {
   co.hi = 15;
   co.direction = -1;
   ss_branch b, bu;
+  /* bad physical parameters: SS_EINVAL, and d records that status with
+   * the value at fault */
+  ss_physical bad = ph;
+  bad.m2 = -1;
+  co.physical = &bad;
+  ss_diag d;
+  ss_diag_clear(&d);
+  ASSERT_EQ_INT(ss_continue(&p, &start, &co, &b, &d), SS_EINVAL);
+  ASSERT_EQ_INT(d.status, SS_EINVAL);
+  ASSERT_TRUE(d.text[0] != 0);
+  ss_branch_free(&b);
+  co.physical = &ph;
   ASSERT_EQ_INT(ss_continue(&p, &start, &co, &b, NULL), SS_OK);
   ASSERT_EQ_INT(b.n_special, 1);
   co.physical = NULL;
@@ -1776,7 +1790,10 @@ static void test_study_options(void) {
   ASSERT_EQ_INT(ss_continue_study(&p, &start, &o, &s, NULL), SS_ECANCELED);
   same_branch(&s.family, &b);
   ASSERT_EQ_INT(s.n_curves, 0);
-  ASSERT_EQ_INT(s.n_branches, 0);
+  /* the period-2 family the cancel stopped is kept with what was found */
+  ASSERT_EQ_INT(s.n_branches, pd ? 1 : 0);
+  if (pd)
+    ASSERT_TRUE(s.branches[0].n_points > 0 && s.of_special[0] >= 0);
   ss_study_free(&s);
   ss_branch_free(&b);
   o.follow = 1;
