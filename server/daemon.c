@@ -131,17 +131,22 @@ static int port_free(const struct sockaddr_storage *ss) {
   return rc;
 }
 
+/* Descriptors beside the connections': listening, epoll, the job store,
+ * logs. */
+#define SPARE_FDS 64
+
 /* Enough descriptors for every connection the flags allow, as far as the
  * hard limit lets: the soft limit after, when it is still too few, else 0. */
 static unsigned long long raise_fd_limit(unsigned max_conn) {
   struct rlimit rl;
   if (getrlimit(RLIMIT_NOFILE, &rl) != 0)
     return 0;
-  rlim_t want = (rlim_t)max_conn + 64;
+  rlim_t want = (rlim_t)max_conn + SPARE_FDS;
   if (rl.rlim_cur < want) {
-    rl.rlim_cur = rl.rlim_max < want ? rl.rlim_max : want;
-    if (setrlimit(RLIMIT_NOFILE, &rl) != 0 || getrlimit(RLIMIT_NOFILE, &rl))
-      return 1;
+    struct rlimit raised = rl;
+    raised.rlim_cur = rl.rlim_max < want ? rl.rlim_max : want;
+    if (setrlimit(RLIMIT_NOFILE, &raised) == 0)
+      rl = raised;
   }
   return rl.rlim_cur < want ? (unsigned long long)rl.rlim_cur : 0;
 }
@@ -257,7 +262,7 @@ struct srv_daemon *srv_start(const srv_config *cfg) {
             "stickslipd: the descriptor limit is %llu, too few for "
             "--max-connections %u (%u wanted): raise the hard limit "
             "(ulimit -Hn, LimitNOFILE=) or lower --max-connections\n",
-            fds, cfg->max_conn, cfg->max_conn + 64);
+            fds, cfg->max_conn, cfg->max_conn + SPARE_FDS);
   srv__jobs_announce(d->jobs);
   fflush(stderr);
   return d;

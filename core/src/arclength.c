@@ -180,6 +180,17 @@ int arc_push(arc_list *l, const void *p) {
   return SS_OK;
 }
 
+int arc_leg_status(ss_diag *d, int leg_rc, double budget,
+                   const char *cancelled) {
+  if (leg_rc == SS_OK)
+    return SS_OK;
+  if (leg_rc == SS_ENOMEM)
+    return ss__fail(d, SS_ENOMEM, "points", 0, "out of memory");
+  return ss__fail(d, leg_rc, "max_seconds", budget, "%s",
+                  leg_rc == SS_ECANCELED ? cancelled
+                                         : "the time budget ran out");
+}
+
 int arc_both_ways(arc_leg_fn *leg, void *ctx, const void *first, size_t size,
                   int max_points, int direction, int note_unwalked,
                   void **points, int *n_points, int *start, char end[2][320],

@@ -112,4 +112,10 @@ int arc_both_ways(arc_leg_fn *leg, void *ctx, const void *first, size_t size,
                   void **points, int *n_points, int *start, char end[2][320],
                   int *leg_rc);
 
+/* What arc_both_ways' *leg_rc says, into @a d: SS_OK; SS_ENOMEM; or the
+ * stop (SS_ELIMIT_TIME, SS_ECANCELED, said with @a cancelled) of a walk
+ * whose time budget was @a budget.  Returns @a leg_rc. */
+int arc_leg_status(ss_diag *d, int leg_rc, double budget,
+                   const char *cancelled);
+
 #endif

@@ -833,11 +833,6 @@ int ss_continue(const ss_params *p, const ss_orbit *start,
                     b->end, &leg_rc) != SS_OK)
     return ss__fail(d, SS_ENOMEM, "points", 0, "out of memory");
   b->points = points;
-  if (leg_rc == SS_ENOMEM)
-    return ss__fail(d, SS_ENOMEM, "points", 0, "out of memory");
-  if (leg_rc != SS_OK)
-    return ss__fail(d, leg_rc, "max_seconds", c.clock.budget, "%s",
-                    leg_rc == SS_ECANCELED ? "the continuation was cancelled"
-                                           : "the time budget ran out");
-  return SS_OK;
+  return arc_leg_status(d, leg_rc, c.clock.budget,
+                        "the continuation was cancelled");
 }

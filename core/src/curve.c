@@ -480,13 +480,7 @@ static int continue_special(const ss_params *p, const ss_branch *b,
   cv->phase = gc.k;
   cv->p1 = gc.id1;
   cv->p2 = gc.id2;
-  if (leg_rc == SS_ENOMEM)
-    return ss__fail(d, SS_ENOMEM, "points", 0, "out of memory");
-  if (leg_rc != SS_OK)
-    return ss__fail(d, leg_rc, "max_seconds", gc.clock.budget, "%s",
-                    leg_rc == SS_ECANCELED ? "cancelled"
-                                           : "the time budget ran out");
-  return SS_OK;
+  return arc_leg_status(d, leg_rc, gc.clock.budget, "cancelled");
 }
 
 int ss_continue_grazing(const ss_params *p, const ss_branch *b,

@@ -16,6 +16,14 @@ static int stops(int rc) {
   return rc == SS_ELIMIT_TIME || rc == SS_ECANCELED || rc == SS_ENOMEM;
 }
 
+/* Whether a family that returned @a rc is the study's to keep: a whole
+ * one, or one the time budget or a cancel cut short with points found
+ * (the caller is promised what was found). */
+static int kept(int rc, const ss_branch *b) {
+  return rc == SS_OK ||
+         ((rc == SS_ELIMIT_TIME || rc == SS_ECANCELED) && b->n_points > 0);
+}
+
 /* Each special point of the kind asked, followed in the second parameter;
  * one that cannot be followed is listed with no points and the reason. */
 static int study_curves(const ss_params *p, const ss_study_opts *o,
@@ -62,9 +70,7 @@ static int study_period2(const ss_params *p, const ss_study_opts *o,
     ss_diag_clear(&d);
     ss_branch *b2 = &s->branches[s->n_branches];
     int rc = ss_continue_period2(p, &s->family, pd, &o->family, b2, &d);
-    /* a family stopped by the time budget or a cancel is kept: the caller
-     * is promised what was found */
-    if (rc == SS_OK || (rc != SS_ENOMEM && stops(rc) && b2->n_points > 0)) {
+    if (kept(rc, b2)) {
       s->of_special[s->n_branches++] = i;
       if (rc == SS_OK)
         continue;
@@ -97,9 +103,8 @@ static int study_beyond(const ss_params *p, const ss_study_opts *o,
     by->adjacent_n_phases = adj.n_phases;
     memcpy(by->adjacent_modes, adj.modes, sizeof adj.modes);
     snprintf(by->adjacent_why, sizeof by->adjacent_why, "%s", d.text);
-    int found =
-        rc == SS_OK || (rc != SS_ENOMEM && stops(rc) && adj.n_points > 0);
-    if (found && o->branch_switching && s->n_branches < SS_MAX_SPECIAL) {
+    if (kept(rc, &adj) && o->branch_switching &&
+        s->n_branches < SS_MAX_SPECIAL) {
       s->branches[s->n_branches] = adj;
       s->of_special[s->n_branches++] = i;
     } else {

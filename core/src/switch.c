@@ -190,7 +190,7 @@ int ss_continue_adjacent(const ss_params *p, const ss_branch *b,
     ss_diag_clear(d);
     return ss__fail(d, SS_INFEASIBLE, "special", g->value,
                     "the adjacent sequence has no orbit past the grazing "
-                    "(%.200s)",
+                    "(%s)",
                     why);
   }
   if (rc != SS_OK)

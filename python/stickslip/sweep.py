@@ -26,13 +26,13 @@ cut after a second, the daemon's Retry-After, up to the client's retries.
 
 The journal (JSON lines: a header naming the path, then one result a line,
 with a hash of the request, and a line for each job naming its items) is
-appended to and flushed as each result arrives (503s aside); a second call with the
-same journal sends only the items whose results it lacks, or whose body has
-changed, and ignores a last line torn by an interruption.  A job goes on at
-the daemon when its sweep is interrupted: the second call reads the results
-of the journal's jobs (those still running as they come), and sends again
-only the items of a job the daemon no longer has (dismissed, or expired
-after ``--job-ttl``).
+appended to and flushed as each result arrives (503s aside); a second
+call with the same journal sends only the items whose results it lacks, or
+whose body has changed, and ignores a last line torn by an interruption.
+A job goes on at the daemon when its sweep is interrupted: the second call
+reads the results of the journal's jobs (those still running as they
+come), and sends again only the items of a job the daemon no longer has
+(dismissed, or expired after ``--job-ttl``).
 """
 
 from __future__ import annotations
