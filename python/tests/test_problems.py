@@ -134,10 +134,14 @@ def check_fields(e: stickslip.ProblemError, cls: type, status: int,
 
 
 def test_out_of_memory(start: Callable[..., Daemon]) -> None:
-    """A daemon whose address space is capped 1 MiB above what it uses
-    once started: a 100 000-sample motion (some 10 MB of answer) cannot be
-    allocated, and is answered out-of-memory; the daemon serves on."""
-    d = start("--no-jobs", "--workers", "1")
+    """A daemon whose address space is capped 8 MiB above what it uses
+    once started: a 2 000 000-sample motion (80 MB of samples in the
+    library alone) cannot be allocated, and is answered out-of-memory; the
+    daemon serves on.  The margin is wide on purpose: the worker's first
+    allocations cannot reserve a malloc arena (64 MiB) under the cap, so
+    each is a mapping of its own, and a margin of 1 MiB left some runs
+    without room for the problem's own few hundred bytes."""
+    d = start("--no-jobs", "--workers", "1", "--max-samples", "2000000")
     with open("/proc/%d/maps" % d.proc.pid) as f:
         if "libasan" in f.read():
             # AddressSanitizer reserves terabytes and aborts where an
@@ -147,12 +151,12 @@ def test_out_of_memory(start: Callable[..., Daemon]) -> None:
         m = re.search(r"VmSize:\s*(\d+)", f.read())
     assert m is not None
     kib = int(m.group(1))
-    cap = (kib << 10) + (1 << 20)
+    cap = (kib << 10) + (8 << 20)
     resource.prlimit(d.proc.pid, resource.RLIMIT_AS, (cap, cap))
     c = d.client(retries=0)
     with pytest.raises(stickslip.ProblemError) as info:
         c.simulate(params=PAPER, initial=X0, t_end=10000,
-                   samples={"n": 100000})
+                   samples={"n": 2000000})
     check_fields(info.value, stickslip.errors.OutOfMemory, 503,
                  "out-of-memory", "/samples")
     assert isinstance(info.value, stickslip.Unavailable)
