@@ -402,7 +402,7 @@ SS_API ss_sim *ss_sim_new(const ss_model *m, double t0, const double x0[4],
 /**
  * Start in a given @a mode (for example stick at the threshold).  The state
  * must be consistent with it: x2' = V for stick (forced exactly), x2' <= V
- * for slip, x2' >= V for overshoot (to 4 ulp of V).
+ * for slip, x2' >= V for overshoot (within 4 DBL_EPSILON V).
  * @return the simulation, or NULL as ss_sim_new(); a state inconsistent with
  *         @a mode, or an unknown mode, is SS_EINVAL.
  */

@@ -274,9 +274,9 @@ static void test_edges(void) {
   }
 }
 
-/* EVIDENCE: README "Hard cases": "10^6 events on the paper's stable orbit,
- * where the state at all 333333 returns stays within 1.8e-15 of the orbit's"
- * (asserted here to 1e-12). */
+/* EVIDENCE: docs/checked/hard-cases.md: "10^6 events on the paper's stable
+ * orbit, where the state at all 333333 returns stays within 2.7e-15 of the
+ * orbit's" (asserted here to 1e-12). */
 static void test_no_drift(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
