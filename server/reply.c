@@ -158,9 +158,19 @@ enum MHD_Result srv__send_body(struct MHD_Connection *c, srv__req *r,
   if (gz)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_ENCODING, "gzip");
   srv__common_headers(r, resp);
-  if (ctype && !strncmp(ctype, "text/html", 9))
+  if (ctype && !strncmp(ctype, "text/html", 9) && r->doc)
+    /* the user's guide: mkdocs' theme runs inline scripts and styles of
+     * its own (the guide is built from the source tree, never from a
+     * request), and nothing else */
+    MHD_add_response_header(resp, "Content-Security-Policy",
+                            "default-src 'self'; script-src 'self' "
+                            "'unsafe-inline'; style-src 'self' "
+                            "'unsafe-inline'; img-src 'self' data:; "
+                            "base-uri 'none'; form-action 'self'; "
+                            "frame-ancestors 'none'");
+  else if (ctype && !strncmp(ctype, "text/html", 9))
     /* the explorer: its own files only, and calls to any daemon it is
-     * pointed at */
+     * pointed at (?api=) */
     MHD_add_response_header(resp, "Content-Security-Policy",
                             "default-src 'self'; connect-src 'self' http: "
                             "https:; img-src 'self' data:; base-uri 'none'; "
