@@ -205,13 +205,27 @@ static void respond(api_response *out, api_problem_kind kind,
   json_object_set_new(o, "detail", json_string(detail ? detail : ""));
   if (pointer && pointer[0])
     json_object_set_new(o, "pointer", json_string(pointer));
-  if (limit && limit[0]) {
+  if (limit && limit[0])
     json_object_set_new(o, "limit", json_string(limit));
-    json_object_set_new(o, "limit_value", json_real(limit_value));
-  }
   out->status = row->status;
   out->body = api__json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII);
   out->len = out->body ? strlen(out->body) : 0;
+  if (out->body && limit && limit[0]) {
+    /* the limit's value last, in its shortest digits as every number of
+     * the API (jansson would write 0.3 as 0.29999999999999999) */
+    char num[32];
+    int k = api__shortest(limit_value, num);
+    char *b = realloc(out->body, out->len + k + 17);
+    if (b) {
+      snprintf(b + out->len - 1, (size_t)k + 18, ",\"limit_value\":%s}", num);
+      out->body = b;
+      out->len = strlen(b);
+    } else {
+      free(out->body);
+      out->body = NULL;
+      out->len = 0;
+    }
+  }
   out->content_type = "application/problem+json";
   out->held = out->len;
   json_decref(o);

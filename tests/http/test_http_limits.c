@@ -125,17 +125,25 @@ static void test_time_limit(void) {
    * runs out: the default budget (10 s) would also end this run with a
    * max_seconds 422, but later */
   double t0 = mono();
-  json_t *j = post("/simulate",
-                   "{" PAPER ",\"initial\":" X0 ",\"t_end\":9e8,"
-                   "\"events\":false}",
-                   422);
+  http_resp r;
+  ASSERT_EQ_INT(http_do(PORT, "POST", "/simulate", "application/json",
+                        "{" PAPER ",\"initial\":" X0 ",\"t_end\":9e8,"
+                        "\"events\":false}",
+                        &r),
+                0);
   double dt = mono() - t0;
+  json_t *j = problem_body("max-seconds 0.05", &r, 422,
+                           "/problems/limit-exceeded", NULL);
   const char *l = json_string_value(json_object_get(j, "limit"));
   ASSERT_TRUE(l && strcmp(l, "max_seconds") == 0);
   ASSERT_NEAR(num(j, "/limit_value"), 0.05, 1e-12);
+  /* in its shortest digits, as every number the API writes (not jansson's
+   * 0.050000000000000003) */
+  ASSERT_TRUE(r.body && strstr(r.body, "\"limit_value\":0.05}") != NULL);
   printf("max-seconds 0.05: answered 422 after %.3f s\n", dt);
   ASSERT_TRUE(dt < 2);
   json_decref(j);
+  http_free(&r);
   ASSERT_EQ_INT(daemon_stop(&d), 0);
   unlink(d.log_path);
 }
