@@ -70,9 +70,12 @@ static int field_values(const api_spec *s, const json_t *obj, const char *ptr,
   for (int i = 0; i < s->n; i++)
     vals[i] = NULL;
   json_object_foreach((json_t *)obj, key, v) {
-    int i = 0;
-    while (i < s->n && strcmp(key, s->fields[i].name) != 0)
-      i++;
+    int i = 0, other = -1;
+    for (; i < s->n && strcmp(key, s->fields[i].name) != 0; i++)
+      if (!strcmp(s->fields[i].name, "*"))
+        other = i;
+    if (i == s->n && other >= 0)
+      continue; /* API_OTHER_KEYS */
     if (i == s->n) {
       char p[160], list[256] = "";
       join(p, sizeof p, ptr, key);

@@ -129,14 +129,15 @@ enum { API_N_DIMENSIONLESS = SS_PARAM_V + 1 };
 #define API_ANY(name)                                                          \
   { name, API_T_ANY }
 
-/* The fields of an orbit object, as /orbit returns it, so that a client may
- * send an orbit back as it got it: x0, z0 and phases as the endpoint reads
- * them (API_ANY where it does not), every other key accepted and ignored. */
-#define API_ORBIT_FIELDS(x0, z0, phases)                                       \
-  x0, z0, phases, API_ANY("kind"), API_ANY("period"), API_ANY("n_turns"),      \
-      API_ANY("margins"), API_ANY("residual"), API_ANY("closure"),             \
-      API_ANY("stability"), API_ANY("samples"), API_ANY("source"),             \
-      API_ANY("iterations")
+/* Any other key of the object accepted and ignored: an object the daemon
+ * answered with, sent back, stays open. */
+#define API_OTHER_KEYS API_ANY("*")
+
+/* The fields of an orbit object, as /orbit or /basins returns it, so that a
+ * client may send an orbit back as it got it, with keys of its own added:
+ * x0, z0 and phases as the endpoint reads them (API_ANY where it does not),
+ * every other key accepted and ignored. */
+#define API_ORBIT_FIELDS(x0, z0, phases) x0, z0, phases, API_OTHER_KEYS
 
 /* Phase sequences: durations (2 to SS_MAX_PHASES numbers > 0) and modes
  * (as many mode names), as fields of a spec. */
