@@ -27,6 +27,7 @@ import re
 import socket
 import subprocess
 import sys
+import tempfile
 import urllib.error
 import urllib.request
 
@@ -43,8 +44,9 @@ RAW = ("%s %s HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def start(binary):
-    p = subprocess.Popen([binary, "--port", "0", "--quiet"],
+def start(binary, state):
+    p = subprocess.Popen([binary, "--port", "0", "--quiet", "--state-dir",
+                          state],
                          stderr=subprocess.PIPE, text=True)
     m = re.search(r"http://[^ \n]+", p.stderr.readline())
     if not m:
@@ -53,11 +55,13 @@ def start(binary):
     return p, m.group(0).rstrip("/")
 
 
-def send(base, method, path, body=None, accept=None):
+def send(base, method, path, body=None, accept=None, prefer=None):
     data = body.encode() if body is not None else None
     headers = {"Content-Type": "application/json"} if body is not None else {}
     if accept:
         headers["Accept"] = accept
+    if prefer:
+        headers["Prefer"] = prefer
     req = urllib.request.Request(base + path, data=data, method=method,
                                  headers=headers)
     try:
@@ -97,6 +101,100 @@ def resolve(spec, obj):
     for part in ref[2:].split("/"):
         spec = spec[part]
     return spec
+
+
+def op_of(spec, template, method, path):
+    """The contract's operation for @a method on @a path (a concrete path
+    made from a template, or with a query), or None."""
+    path = path.split("?")[0]
+    return spec["paths"].get(template.get(path, path), {}).get(method.lower())
+
+
+def check(spec, op, method, path, status, headers, text, bad):
+    """The answer against the contract's operation @a op (None: an unknown
+    path or method); its faults appended to @a bad.  The number of answers
+    (NDJSON lines) found valid."""
+    ctype = headers.get("Content-Type", "")
+    where = "%s %s -> %d" % (method, path, status)
+    # the headers every answer, or every such answer, carries
+    if not headers.get("X-Request-Id"):
+        bad.append(where + ": no X-Request-Id")
+    if status == 503 and not headers.get("Retry-After"):
+        bad.append(where + ": a 503 without Retry-After")
+    if status == 405 and not headers.get("Allow"):
+        bad.append(where + ": a 405 without Allow")
+    if op is None:  # an unknown path or method: a problem
+        ok = status in (404, 405) and \
+            ctype.startswith("application/problem+json")
+        schema = spec["components"]["schemas"]["Problem"]
+        if not ok:
+            bad.append(where + ": expected a 404/405 problem")
+            return 0
+    else:
+        resp = op["responses"].get(str(status))
+        if resp is None:
+            bad.append(where + ": status not in the contract")
+            return 0
+        resp = resolve(spec, resp)
+        media = ctype.split(";")[0].strip()
+        content = resp.get("content", {})
+        if media not in content:
+            bad.append(where + ": %s not in the contract (%s)" %
+                       (media, ", ".join(content)))
+            return 0
+        # an NDJSON answer: each line under the item schema
+        schema = content[media].get("itemSchema",
+                                    content[media].get("schema", {}))
+    if "json" not in ctype:
+        return 1  # text (the metrics): its media type is checked
+    lines = [text] if "ndjson" not in ctype else \
+        [line for line in text.splitlines() if line.strip()]
+    valid = 0
+    for line in lines:
+        try:
+            value = json.loads(line)
+            full = dict(schema)
+            full["components"] = spec["components"]
+            jsonschema.validate(value, full,
+                                cls=jsonschema.Draft202012Validator)
+            valid += 1
+        except (ValueError, jsonschema.ValidationError) as e:
+            msg = getattr(e, "message", str(e))
+            path_in = "/".join(str(p) for p in getattr(e, "absolute_path", []))
+            bad.append("%s: at /%s: %s" % (where, path_in, msg[:200]))
+    return valid
+
+
+def check_job(spec, base, bad):
+    """A job's documents under the contract: created (201), read once it
+    is done, listed, its results, dismissed, and read again (dismissed)."""
+    body = json.dumps({"params": {"chi": 0.2, "eta": 4, "us": 0.0724,
+                                  "ur": 0.6178, "V": 1},
+                       "initial": [0.1, 0, 0, 0], "t_end": 10})
+    template, valid = {}, 0
+    status, headers, text = send(base, "POST", "/simulate", body,
+                                 prefer="respond-async")
+    valid += check(spec, op_of(spec, template, "POST", "/simulate"), "POST",
+                   "/simulate (async)", status, headers, text, bad)
+    loc = headers.get("Location", "")
+    if status != 201 or not loc.startswith("/jobs/"):
+        bad.append("POST /simulate (async) -> %d: no job (Location %r)" %
+                   (status, loc))
+        return valid
+    template[loc] = "/jobs/{jobId}"
+    template[loc + "/results"] = "/jobs/{jobId}/results"
+    for method, path in (("GET", loc + "?wait=30"), ("GET", "/jobs"),
+                         ("GET", loc + "/results"), ("DELETE", loc),
+                         ("GET", loc)):
+        status, headers, text = send(base, method, path)
+        valid += check(spec, op_of(spec, template, method, path), method,
+                       path, status, headers, text, bad)
+    after = json.loads(text) if status == 200 else {}
+    if after.get("status") != "dismissed" or after.get("progress") != 100:
+        # the job had succeeded: its progress does not go back
+        bad.append("GET %s after DELETE -> %d, not dismissed at 100: %.200s"
+                   % (loc, status, text))
+    return valid
 
 
 def main():
@@ -144,7 +242,8 @@ def main():
     # framing that could smuggle a request, on a cheap and a computing path
     for method, path in (("GET", "/health"), ("POST", "/orbit")):
         requests.append((method, path, RAW % (method, path)))
-    proc, base = start(sys.argv[1])
+    state = tempfile.TemporaryDirectory()
+    proc, base = start(sys.argv[1], state.name)
     bad, checked = [], 0
     try:
         for method, path, body, *accept in requests:
@@ -153,57 +252,13 @@ def main():
             else:
                 status, headers, text = send(base, method, path, body,
                                              *accept)
-            ctype = headers.get("Content-Type", "")
-            where = "%s %s -> %d" % (method, path, status)
-            # the headers every answer, or every such answer, carries
-            if not headers.get("X-Request-Id"):
-                bad.append(where + ": no X-Request-Id")
-            if status == 503 and not headers.get("Retry-After"):
-                bad.append(where + ": a 503 without Retry-After")
-            if status == 405 and not headers.get("Allow"):
-                bad.append(where + ": a 405 without Allow")
-            op = paths.get(template.get(path, path), {}).get(method.lower())
-            if op is None:  # an unknown path or method: a problem
-                ok = status in (404, 405) and \
-                    ctype.startswith("application/problem+json")
-                schema = spec["components"]["schemas"]["Problem"]
-                if not ok:
-                    bad.append(where + ": expected a 404/405 problem")
-                    continue
-            else:
-                resp = op["responses"].get(str(status))
-                if resp is None:
-                    bad.append(where + ": status not in the contract")
-                    continue
-                media = ctype.split(";")[0].strip()
-                content = resp.get("content", {})
-                if media not in content:
-                    bad.append(where + ": %s not in the contract (%s)" %
-                               (media, ", ".join(content)))
-                    continue
-                # an NDJSON answer: each line under the item schema
-                schema = content[media].get("itemSchema",
-                                            content[media].get("schema", {}))
-            if not ("json" in ctype):
-                checked += 1  # text (the metrics): its media type is checked
-                continue
-            lines = [text] if "ndjson" not in ctype else \
-                [l for l in text.splitlines() if l.strip()]
-            for line in lines:
-                try:
-                    value = json.loads(line)
-                    full = dict(schema)
-                    full["components"] = spec["components"]
-                    jsonschema.validate(value, full,
-                                        cls=jsonschema.Draft202012Validator)
-                    checked += 1
-                except (ValueError, jsonschema.ValidationError) as e:
-                    msg = getattr(e, "message", str(e))
-                    path_in = "/".join(str(p) for p in getattr(e, "absolute_path", []))
-                    bad.append("%s: at /%s: %s" % (where, path_in, msg[:200]))
+            checked += check(spec, op_of(spec, template, method, path),
+                             method, path, status, headers, text, bad)
+        checked += check_job(spec, base, bad)
     finally:
         proc.terminate()
         proc.wait()
+        state.cleanup()
     for b in bad[:40]:
         print(b)
     print("validate: %d requests, %d answers valid, %d not" %

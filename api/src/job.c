@@ -314,8 +314,12 @@ static json_t *instant(double epoch) {
 /* Progress 0-100 from the items done (from the chunks when the job counts
  * no items): 100 only once the job has succeeded, so that the last chunk,
  * which may add no item (a batch's done line), is still to come while it
- * says 99.  Monotone while the counts are. */
+ * says 99; a job dismissed once every chunk was stored keeps its 100.
+ * Monotone while the counts are. */
 static int progress(const api_job_info *in) {
+  if (in->status && !strcmp(in->status, "dismissed") && in->chunks > 0 &&
+      in->chunks_done >= in->chunks)
+    return 100;
   long done = in->items > 0 ? in->items_done : in->chunks_done;
   long total = in->items > 0 ? in->items : in->chunks;
   int p =
