@@ -28,7 +28,7 @@ const PUNIT = { m1: "M", m2: "M", k1: "M/s²", k2: "M/s²", Fs: "M L/s²", Fr: "
 
 const $ = (sel, root) => (root || document).querySelector(sel);
 const state = { orbits: [], selected: 0, hidden: new Set(), params: null, units: null,
-                frames: null, open: new Set(), figures: {} };
+                frames: null, open: new Set(), figures: {}, work: {} };
 
 /* ---- talking to the daemon ---------------------------------------------- */
 
@@ -39,6 +39,7 @@ class Problem extends Error {
     this.status = status;
     this.where = (body && (body.pointer || body.field)) || "";
     this.title = (body && body.title) || "";
+    this.type = (body && body.type) || "";
   }
 }
 
@@ -49,6 +50,8 @@ async function call(path, opts) {
   try {
     return await fetch(url, opts);
   } catch (e) {
+    if (e.name === "AbortError")
+      throw e;
     const target = API || location.origin;
     const other = API && new URL(API, location.href).origin !== location.origin;
     throw new Problem(0, {
@@ -69,17 +72,42 @@ async function failure(res) {
   return new Problem(res.status, problem || { detail: text.slice(0, 300) });
 }
 
-async function post(path, body) {
-  const res = await call(path, {
-    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body),
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+class Cancelled extends Error {}
+const STORE_UNAVAILABLE = /\/problems\/store-unavailable$/;
+
+/* call(), sent again after a 503 with Retry-After (every compute slot
+ * busy) once that has passed: at most 10 s, three tries in all.  A job
+ * store that cannot take the job is not waited for (job() asks without). */
+async function send(path, opts) {
+  for (let tries = 1; ; tries++) {
+    const res = await call(path, opts);
+    const wait = Number(res.headers.get("Retry-After"));
+    if (res.status !== 503 || tries === 3 || !res.headers.has("Retry-After") || !(wait >= 0) ||
+        STORE_UNAVAILABLE.test((await failure(res.clone())).type))
+      return res;
+    await sleep(Math.min(wait, 10) * 1000);
+  }
+}
+
+async function post(path, body, signal) {
+  const res = await send(path, {
+    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body), signal,
   });
   if (!res.ok)
     throw await failure(res);
   return res.json();
 }
 
-const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-class Cancelled extends Error {}
+/* Deletes job loc: null when done (or the job already gone), else why not. */
+async function dismiss(loc) {
+  try {
+    const r = await call(loc, { method: "DELETE" });
+    return r.ok || r.status === 404 ? null : await failure(r);
+  } catch (e) {
+    return e;
+  }
+}
 
 /* Each NDJSON line of the answer res, parsed, to onLine as soon as it has
  * come whole: the body read as it streams. */
@@ -116,9 +144,24 @@ async function job(path, body, ctl, progress, onLine) {
   const headers = { "Content-Type": "application/json", Prefer: "respond-async" };
   if (onLine)
     headers.Accept = "application/x-ndjson";
-  const res = await call(path, { method: "POST", headers, body: JSON.stringify(body) });
-  if (res.status === 200)
-    return onLine ? eachLine(res, onLine) : res.text();
+  const opts = { method: "POST", headers, body: JSON.stringify(body), signal: ctl.abort.signal };
+  let res;
+  try {
+    res = await send(path, opts);
+    if (res.status === 503) {
+      const p = await failure(res);
+      if (!STORE_UNAVAILABLE.test(p.type))
+        throw p;
+      /* no job store to take it: asked again without, answered at once */
+      delete headers.Prefer;
+      res = await send(path, opts);
+    }
+    /* answered at once: Cancel aborts the fetch */
+    if (res.status === 200)
+      return await (onLine ? eachLine(res, onLine) : res.text());
+  } catch (e) {
+    throw e.name === "AbortError" ? new Cancelled() : e;
+  }
   if (res.status !== 201)
     throw await failure(res);
   const loc = res.headers.get("Location");
@@ -128,10 +171,8 @@ async function job(path, body, ctl, progress, onLine) {
     return streamJob(loc, st, ctl, progress, onLine);
   for (;;) {
     progress(st);
-    if (ctl.cancelled) {
-      await call(loc, { method: "DELETE" });
-      throw new Cancelled();
-    }
+    if (ctl.cancelled)
+      throw (await dismiss(loc)) || new Cancelled();
     if (st.status === "successful" || st.status === "failed" || st.status === "dismissed")
       break;
     await sleep(250);
@@ -153,19 +194,23 @@ async function job(path, body, ctl, progress, onLine) {
  * stream and deletes the job. */
 async function streamJob(loc, st, ctl, progress, onLine) {
   const abort = new AbortController();
-  let reading = true;
+  let reading = true, undeleted = null;
+  /* never rejects: a status lost (the network, a busy daemon) is no reason
+   * to drop the results still streaming; the next poll asks again */
   const poll = (async () => {
     while (reading) {
       progress(st);
       if (ctl.cancelled) {
         abort.abort();
-        await call(loc, { method: "DELETE" });
+        undeleted = await dismiss(loc);
         return;
       }
       await sleep(250);
-      const r = await call(loc);
-      if (r.ok)
-        st = await r.json();
+      try {
+        const r = await call(loc);
+        if (r.ok)
+          st = await r.json();
+      } catch (e) { /* asked again next time */ }
     }
   })();
   try {
@@ -181,9 +226,9 @@ async function streamJob(loc, st, ctl, progress, onLine) {
     await poll;
   }
   if (ctl.cancelled)
-    throw new Cancelled();
-  const r = await call(loc);
-  const fin = r.ok ? await r.json() : st;
+    throw undeleted || new Cancelled();
+  const r = await call(loc).catch(() => null);
+  const fin = r && r.ok ? await r.json() : st;
   progress(fin);
   if (fin.status === "dismissed")
     throw new Cancelled();
@@ -350,8 +395,15 @@ function viewURL() {
   return "?" + q.toString();
 }
 
+/* The URL's selected and hidden as the search found settled them (it
+ * resets them), unless a newer search took its place. */
+function settle(found) {
+  return found.then((mine) => mine && remember(true));
+}
+
 function remember(replace) {
   const url = viewURL();
+  shownView = viewKey(url);
   if (url === location.search)
     return;
   if (replace)
@@ -389,9 +441,18 @@ function readURL() {
 const PORTRAIT_FIELDS = ["t", "x1", "x2", "v1", "v2", "mode", "F1", "F2"];
 const color = (i) => COLORS[i % COLORS.length];
 
+/* The search in flight: a newer one (Find, a map cell, Back) aborts it and
+ * drops whatever it still gets. */
+let search = null;
+
 /* The plots' ranges from a first, coarse pass; then the orbits again,
- * sampled to half a pixel of those plots. */
+ * sampled to half a pixel of those plots.  True unless a newer search
+ * took its place. */
 async function findOrbits(view) {
+  if (search)
+    search.abort();
+  const mine = search = new AbortController();
+  const current = () => search === mine;
   clearError("orbits");
   const base = readParams();
   const form = $("#params");
@@ -404,7 +465,9 @@ async function findOrbits(view) {
   $("#find").disabled = true;
   const t0 = performance.now();
   try {
-    const first = await post("/orbit", body);
+    const first = await post("/orbit", body, mine.signal);
+    if (!current())
+      return false;
     state.params = base;
     state.units = first.units;
     state.orbits = [];
@@ -414,7 +477,7 @@ async function findOrbits(view) {
       listOrbits();
       clearPlots();
       status("orbits", "no orbit: " + (first.reason || "none found"));
-      return;
+      return true;
     }
     const s = first.orbits.map((o) => o.samples);
     framePortraits([Plot.extent(s.map((q) => q.x1)), Plot.extent(s.map((q) => q.v1))],
@@ -426,7 +489,9 @@ async function findOrbits(view) {
       scale: { x1: r1.sx, v1: r1.sy, x2: r2.sx, v2: r2.sy },
       fields: PORTRAIT_FIELDS,
     };
-    const answer = await post("/orbit", body);
+    const answer = await post("/orbit", body, mine.signal);
+    if (!current())
+      return false;
     state.orbits = answer.orbits;
     if (view) {
       state.selected = view.selected < answer.orbits.length ? view.selected : 0;
@@ -438,14 +503,20 @@ async function findOrbits(view) {
     status("orbits", answer.orbits.length + " orbit(s), " + n + " points drawn, in " +
            Math.round(performance.now() - t0) + " ms");
   } catch (e) {
+    if (!current())
+      return false;
     status("orbits", "");
     state.orbits = [];
     listOrbits();
     clearPlots();
     showError("orbits", e);
   } finally {
-    $("#find").disabled = false;
+    if (current()) {
+      search = null;
+      $("#find").disabled = false;
+    }
   }
+  return true;
 }
 
 function clearPlots() {
@@ -552,6 +623,8 @@ function orbitTable(cols) {
 function drawOrbits() {
   if (!state.frames)
     return;
+  /* the layers redrawn: a simulation drawing into them stops */
+  simulation++;
   const { r1, r2 } = state.frames;
   const style = (m) => ({ dash: DASH[m] || "", width: m === "overshoot" ? 2 : 1.6 });
   for (const [p, n] of [[r1, 1], [r2, 2]]) {
@@ -594,9 +667,12 @@ function drawConstraints() {
     svg.textContent = "";
     return;
   }
-  const s = o.samples, ts = [], f1 = [], f2 = [];
+  /* runs: where each stick starts in ts, so that the slips between are not joined */
+  const s = o.samples, ts = [], f1 = [], f2 = [], runs = [];
   for (let i = 0; i < s.t.length; i++)
     if (s.mode[i] === "stick") {
+      if (i === 0 || s.mode[i - 1] !== "stick")
+        runs.push(ts.length);
       ts.push(s.t[i]);
       f1.push(s.F1[i]);
       f2.push(s.F2[i]);
@@ -613,12 +689,13 @@ function drawConstraints() {
                               xname: "t", yname: "F" });
   Plot.el("line", { x1: p.pad.left, x2: p.pad.left + p.pw, y1: p.y(0), y2: p.y(0),
                     stroke: "#5b6570", "stroke-width": 0.8 }, p.layer);
-  const draw = (ys, dash, name) => {
-    const pts = ts.map((t, i) => p.x(t).toFixed(2) + "," + p.y(ys[i]).toFixed(2));
+  const draw = (ys, dash, name) => runs.forEach((from, k) => {
+    const pts = ts.slice(from, runs[k + 1]).map((t, i) => p.x(t).toFixed(2) + "," +
+                                                          p.y(ys[from + i]).toFixed(2));
     Plot.el("polyline", { points: pts.join(" "), fill: "none", stroke: color(state.selected),
                           "stroke-width": 1.6, "stroke-dasharray": dash, class: "constraint",
                           "data-name": name }, p.layer);
-  };
+  });
   draw(f1, "", "F1");
   draw(f2, "6 4", "F2");
   Plot.legend(p, [{ label: "F1 > 0", color: color(state.selected) },
@@ -654,12 +731,17 @@ function drawMultipliers() {
 
 /* ---- simulating from a state ------------------------------------------- */
 
+/* The simulation running: a newer one, or a redraw, ends it. */
+let simulation = 0;
+
 /* Three periods of the selected orbit from x in six pieces, each drawn as
  * it arrives and the next started from its final state. */
 async function simulateFrom(x) {
   const o = state.orbits[state.selected];
   if (!o || !state.frames)
-    return;
+    return showError("orbits", new Problem(0, { detail: "find an orbit first: a simulation runs " +
+                                                        "for three of its periods" }));
+  const mine = ++simulation;
   const { r1, r2 } = state.frames;
   clearError("orbits");
   for (const f of [r1, r2])
@@ -675,6 +757,8 @@ async function simulateFrom(x) {
         samples: { tolerance: 0.5, scale: { x1: r1.sx, v1: r1.sy, x2: r2.sx, v2: r2.sy },
                    fields: ["x1", "x2", "v1", "v2", "mode"] },
       }));
+      if (mine !== simulation)
+        return;
       const s = ans.samples;
       Plot.lines(r2, s.x2, s.v2, s.mode, "#555", { class: "simulated" }, style);
       Plot.lines(r1, s.x1, s.v1, s.mode, "#555", { class: "simulated" }, style);
@@ -684,13 +768,15 @@ async function simulateFrom(x) {
              points + " points, " + (k + 1) + " of " + pieces + " pieces");
     }
   } catch (e) {
-    showError("orbits", e);
+    if (mine === simulation)
+      showError("orbits", e);
   }
 }
 
 function clickSimulate(evt, n) {
   const o = state.orbits[state.selected];
-  if (!o || !state.frames)
+  /* the second click of a double click (which returns to the whole) */
+  if (!o || !state.frames || evt.detail > 1)
     return;
   const p = n === 2 ? state.frames.r2 : state.frames.r1;
   if (!p.inside(evt))
@@ -712,12 +798,14 @@ async function continueFamily() {
   if (!o)
     return showError("family", new Problem(0, { detail: "find an orbit first" }));
   status("family", "continuing...");
+  state.figures.family = null;
   f.querySelector("button").disabled = true;
   try {
     const ans = await post("/continue", Object.assign({}, state.params, {
       guess: { durations: o.phases.map((q) => q.duration), modes: o.phases.map((q) => q.mode) },
       parameter: f.parameter.value,
       range: [Number(f.from.value), Number(f.to.value)],
+      fields: ["period", "stable"],
     }));
     const pts = ans.branches.flatMap((b) => b.points);
     const rows = [];
@@ -768,7 +856,11 @@ async function continueFamily() {
 async function longWork(id, what, work) {
   const form = $("#" + id + "-form"), go = form.querySelector("button[type=submit]");
   const cancel = form.querySelector(".cancel"), bar = form.querySelector("progress");
-  const ctl = { cancelled: false };
+  stopWork(id);
+  const ctl = state.work[id] = { cancelled: false, abort: new AbortController() };
+  /* a run stopped for a newer one leaves the panel to it */
+  const current = () => state.work[id] === ctl;
+  state.figures[id] = null;
   clearError(id);
   go.disabled = true;
   cancel.hidden = false;
@@ -776,11 +868,13 @@ async function longWork(id, what, work) {
   bar.hidden = false;
   bar.value = 0;
   cancel.onclick = () => {
-    ctl.cancelled = true;
+    stopWork(id, true);
     cancel.disabled = true;
     status(id, what + ": cancelling...");
   };
   ctl.progress = (st) => {
+    if (!current())
+      return;
     bar.value = st.progress;
     const items = st.items ? ", " + st.items.done + " of " + st.items.total + " done" : "";
     status(id, what + " job: " + st.status + ", " + st.progress + " %" + items);
@@ -788,6 +882,8 @@ async function longWork(id, what, work) {
   try {
     await work(ctl);
   } catch (e) {
+    if (!current())
+      return;
     if (e instanceof Cancelled)
       status(id, what + ": cancelled");
     else {
@@ -795,10 +891,26 @@ async function longWork(id, what, work) {
       showError(id, e);
     }
   } finally {
-    go.disabled = false;
-    cancel.hidden = true;
-    bar.hidden = true;
+    if (current()) {
+      state.work[id] = null;
+      go.disabled = false;
+      cancel.hidden = true;
+      bar.hidden = true;
+    }
   }
+}
+
+/* Cancels panel id's running job (its fetch aborted, its job deleted);
+ * kept as the panel's current run only when asked (Cancel), so that a
+ * newer run or view takes the panel over. */
+function stopWork(id, keep) {
+  const ctl = state.work[id];
+  if (!ctl)
+    return;
+  ctl.cancelled = true;
+  ctl.abort.abort();
+  if (!keep)
+    state.work[id] = null;
 }
 
 /* The map's categories: a cell's orbits of the asked kind. */
@@ -810,6 +922,17 @@ function mapClass(l) {
   if (!l.orbits.length)
     return 0;
   return l.orbits.length > 1 ? 3 : l.orbits[0].stable ? 2 : 1;
+}
+
+/* A map axis: its cells centred on the grid's values; a single cell (the
+ * daemon puts it at from) as wide as the range, about from. */
+function cellAxis(r, n) {
+  if (n === 1) {
+    const h = Math.abs(r[1] - r[0]) / 2 || Math.abs(r[0]) / 2 || 0.5;
+    return [r[0] - h, r[0] + h];
+  }
+  const h = Math.abs(r[1] - r[0]) / (2 * (n - 1 || 1));
+  return [Math.min(r[0], r[1]) - h, Math.max(r[0], r[1]) + h];
 }
 
 async function existenceMap() {
@@ -828,12 +951,8 @@ async function existenceMap() {
   await longWork("map", "map", async (ctl) => {
     status("map", "map: submitted");
     const svg = $("#map");
-    /* cells centred on the grid's values */
-    const hx = (xr[1] - xr[0]) / (2 * (xn - 1 || 1)), hy = (yr[1] - yr[0]) / (2 * (yn - 1 || 1));
     const p = Plot.frame(svg, {
-      x: [Math.min(xr[0], xr[1]) - Math.abs(hx), Math.max(xr[0], xr[1]) + Math.abs(hx)],
-      y: [Math.min(yr[0], yr[1]) - Math.abs(hy), Math.max(yr[0], yr[1]) + Math.abs(hy)],
-      exact: true, side: 100, xlabel: label(xp, "param"), ylabel: label(yp, "param"), xname: xp, yname: yp });
+      x: cellAxis(xr, xn), y: cellAxis(yr, yn), exact: true, side: 100, xlabel: label(xp, "param"), ylabel: label(yp, "param"), xname: xp, yname: yp });
     svg.setAttribute("aria-label", "existence map: each cell a button (arrow keys move between " +
                      "cells, Enter loads the cell's orbits)");
     const cw = p.pw / xn, ch = p.ph / yn;
@@ -867,6 +986,8 @@ async function existenceMap() {
                  l.orbits.map((q) => q.kind + ":" + q.period).join(" ")]);
     };
     await job("/map", request, ctl, ctl.progress, cell);
+    if (ctl.cancelled)
+      throw new Cancelled();
     state.figures.map = () => ({ columns: [xp, yp, "orbits", "stable", "kind:period"], rows });
     /* the current parameter point */
     const cur = paramValues();
@@ -929,13 +1050,17 @@ function mapCell(evt) {
   }
   markStale();
   remember();
-  findOrbits();
+  settle(findOrbits());
 }
 
 async function basins() {
   const f = $("#basins-form");
   if (!state.params)
     return showError("basins", new Problem(0, { detail: "find orbits first" }));
+  /* no more cells a side than the figure has pixels: the rest is not seen */
+  const most = Math.max(...Plot.inner($("#basins"), 150));
+  if (Number(f.n.value) > most)
+    f.n.value = most;
   const n = Number(f.n.value);
   const xr = [Number(f.x1from.value), Number(f.x1to.value)];
   const yr = [Number(f.x2from.value), Number(f.x2to.value)];
@@ -1002,6 +1127,8 @@ async function basins() {
       }
     };
     await job("/basins", request, ctl, ctl.progress, line);
+    if (ctl.cancelled)
+      throw new Cancelled();
     const counts = new Map();
     for (const b of labels)
       counts.set(b, (counts.get(b) || 0) + 1);
@@ -1055,15 +1182,25 @@ function exportButtons() {
       b.addEventListener("click", async () => {
         if (!svg.childNodes.length)
           return;
-        Plot.download(name + "." + fmt.toLowerCase(), await make());
+        try {
+          const blob = await make();
+          if (blob)
+            Plot.download(name + "." + fmt.toLowerCase(), blob);
+        } catch (e) {
+          showError(["family", "map", "basins"].includes(svg.id) ? svg.id : "orbits", e);
+        }
       });
       bar.appendChild(b);
     };
     add("SVG", () => new Blob([Plot.svgText(svg)], { type: "image/svg+xml" }));
     add("PNG", () => Plot.pngBlob(svg));
-    add("CSV", () => new Blob([Plot.csv(state.figures[svg.id]())], { type: "text/csv" }));
+    /* a figure's data: none while it is computed (null), so none exported */
+    const data = () => state.figures[svg.id] && state.figures[svg.id]();
+    add("CSV", () => data() && new Blob([Plot.csv(data())], { type: "text/csv" }));
     add("JSON", () => {
-      const t = state.figures[svg.id]();
+      const t = data();
+      if (!t)
+        return null;
       const doc = { figure: fig.dataset.name, units: state.units, input: state.params,
                     columns: t.columns, rows: t.rows };
       return new Blob([JSON.stringify(doc, null, 1)], { type: "application/json" });
@@ -1074,12 +1211,33 @@ function exportButtons() {
 
 /* ---- wiring ------------------------------------------------------------- */
 
+/* The view a URL's search asks for, less its selection and hidden curves:
+ * what needs computing.  shownView: the one on the page. */
+function viewKey(search) {
+  const q = new URLSearchParams(search);
+  q.delete("selected");
+  q.delete("hidden");
+  return q.toString();
+}
+let shownView = null;
+
 /* The view of the URL: the forms set, the orbits found, and the panels it
- * names run again. */
+ * names run again (cancelling those running). */
 async function showURL() {
+  const was = shownView;
+  shownView = viewKey(location.search);
   const view = readURL();
+  if (shownView === was && state.orbits.length) {
+    /* only the selection or the hidden curves differ: nothing to compute */
+    state.selected = view.selected < state.orbits.length ? view.selected : 0;
+    state.hidden = new Set([...view.hidden].filter((i) => i < state.orbits.length));
+    listOrbits();
+    drawOrbits();
+    return;
+  }
   state.open = new Set(view.open);
   for (const id of ["family", "map", "basins"]) {
+    stopWork(id);
     $("#" + id).textContent = "";
     status(id, "");
     clearError(id);
@@ -1102,7 +1260,7 @@ $("#params").addEventListener("submit", (e) => {
   e.preventDefault();
   state.open.clear();
   remember();
-  findOrbits();
+  settle(findOrbits());
 });
 $("#continue-form").parameter.addEventListener("change", familyRange);
 $("#simulate-form").addEventListener("submit", (e) => {
@@ -1123,5 +1281,8 @@ for (const [id, run] of [["continue-form", continueFamily], ["map-form", existen
     run();
   });
 window.addEventListener("popstate", showURL);
+/* the daemon the answers come from, when not this page's */
+if (API)
+  $("#daemon").textContent = "the daemon at " + API;
 exportButtons();
 showURL().then(() => remember(true));

@@ -36,7 +36,8 @@ const Plot = (() => {
     const step0 = span / n, mag = Math.pow(10, Math.floor(Math.log10(step0)));
     const step = [1, 2, 5, 10].map((m) => m * mag).find((s) => s >= step0);
     const out = [];
-    for (let t = Math.ceil(lo / step) * step; t <= hi + 1e-12 * span; t += step)
+    /* a span of a few ulps: a step below half an ulp of t would not move it */
+    for (let t = Math.ceil(lo / step) * step; t <= hi + 1e-12 * span && t + step !== t; t += step)
       out.push(Math.abs(t) < 1e-12 * span ? 0 : t);
     return out;
   }
@@ -57,6 +58,12 @@ const Plot = (() => {
     return [r[0] - 0.05 * d, r[1] + 0.05 * d];
   }
 
+  /* The plotting area's width and height in svg (side: its legend's column). */
+  function inner(svg, side) {
+    return [Number(svg.dataset.width) - PAD.left - (side || PAD.right),
+            Number(svg.dataset.height) - PAD.top - PAD.bottom];
+  }
+
   /* Clears svg and draws its axes over the ranges xr, yr (widened by 5 %
    * unless exact); labels name the quantity and its unit.  Returns the
    * figure: x(), y() from data to the viewBox, invert() from a pointer
@@ -69,7 +76,7 @@ const Plot = (() => {
     svg.style.width = w + "px";
     svg.setAttribute("font-family", "system-ui, sans-serif");
     const xr = o.exact ? o.x : widen(o.x), yr = o.exact ? o.y : widen(o.y);
-    const pw = w - PAD.left - (o.side || PAD.right), ph = h - PAD.top - PAD.bottom;
+    const [pw, ph] = inner(svg, o.side);
     const p = {
       svg, xr, yr, pw, ph, w, h, pad: PAD, side: o.side || 0,
       xname: o.xname || o.xlabel, yname: o.yname || o.ylabel,
@@ -209,7 +216,10 @@ const Plot = (() => {
       if (!p.inside(evt))
         return;
       evt.preventDefault();
-      const [cx, cy] = p.invert(evt), f = evt.deltaY > 0 ? 1.25 : 0.8;
+      /* by how far the wheel turned: a trackpad sends many small deltas,
+       * a mouse's notch (about 100 px) zooms by some 20 % */
+      const px = evt.deltaY * (evt.deltaMode === 1 ? 33 : evt.deltaMode === 2 ? 800 : 1);
+      const [cx, cy] = p.invert(evt), f = Math.exp(Math.max(-1, Math.min(1, px * 0.002)));
       redraw([cx - (cx - p.xr[0]) * f, cx + (p.xr[1] - cx) * f],
              [cy - (cy - p.yr[0]) * f, cy + (p.yr[1] - cy) * f]);
     };
@@ -270,5 +280,5 @@ const Plot = (() => {
     setTimeout(() => URL.revokeObjectURL(a.href), 10000);
   }
 
-  return { el, fmt, extent, frame, lines, legend, readout, zoom, svgText, pngBlob, csv, download };
+  return { el, fmt, ticks, extent, inner, frame, lines, legend, readout, zoom, svgText, pngBlob, csv, download };
 })();

@@ -12,9 +12,12 @@
 // numbers); picks a map cell with the keyboard; runs maps as jobs
 // (progress; one of 100x100 cancelled, one of 30x30 finished) and 256x256 basins whose rows are
 // drawn as they arrive; continues the family in Fr in physical units; shows errors
-// next to their panel and explains a CORS failure; runs axe-core (no
-// serious or critical violation) and checks that nothing overflows at
-// 420 px.  Screenshots go to OUT_DIR.
+// next to their panel and explains a CORS failure; with requests
+// intercepted, checks races (two searches, Back, a double click), lost job
+// statuses, retries after a 503, Cancel of an answer given at once and
+// exports while a map runs; runs axe-core (no serious or critical
+// violation), checks that nothing overflows at 420 px and that axes over
+// one ulp are drawn.  Screenshots go to OUT_DIR.
 import fs from "node:fs";
 import path from "node:path";
 import { createRequire } from "node:module";
@@ -296,6 +299,143 @@ try {
   check(failed.length === 0, "no failed request: " + failed.join("; "));
   check(problems.length === 0, "no 4xx/5xx answer before the bad inputs: " + problems.join("; "));
 
+  // 5a. races, lost answers, retries: each a few seconds.  Requests are
+  // intercepted: held, failed, answered 503 or sent without Prefer once
+  // (each rule taken by the first request it matches)
+  const rules = [], posted = [];
+  await page.setRequestInterception(true);
+  page.on("request", (r) => {
+    const u = new URL(r.url());
+    if (r.method() === "POST")
+      posted.push(u.pathname);
+    const k = rules.findIndex((x) => x.method === r.method() && x.path.test(u.pathname));
+    const rule = k >= 0 ? rules.splice(k, 1)[0] : null;
+    const go = () => r.continue().catch(() => {});
+    if (!rule)
+      go();
+    else if (rule.hold)
+      setTimeout(go, rule.hold);
+    else if (rule.fail)
+      r.abort().catch(() => {});
+    else if (rule.respond)
+      r.respond(rule.respond).catch(() => {});
+    else if (rule.noPrefer) {
+      const h = Object.assign({}, r.headers());
+      delete h.prefer;
+      r.continue({ headers: h }).catch(() => {});
+    }
+  });
+  const settled = () => page.waitForFunction(() => /orbit\(s\)/.test(document.getElementById("status").textContent) &&
+                                             !document.getElementById("find").disabled, { timeout: 30000 });
+  const pause = (ms) => new Promise((r) => setTimeout(r, ms));
+  const periods = async () => (await rowsOf()).map((r) => r[4]).join(", ");
+  const paperPeriods = direct.orbits.map((o) => o.period.toFixed(6)).join(", ");
+  await page.goto(base + "/?" + q + "&open=map&m.xn=3&m.yn=3&m.max_period=1&m.kind=overshoot", { waitUntil: "networkidle0" });
+  await page.waitForFunction(() => document.querySelectorAll("#map .legend").length > 0, { timeout: 30000 });
+  // Back to a view that differs only in its selection: nothing computed again
+  await page.click("#orbits tbody tr[data-index='1']");
+  posted.length = 0;
+  await page.goBack();
+  await page.waitForFunction(() => document.querySelector("#orbits tbody tr.selected")?.dataset.index === "0", { timeout: 5000 })
+    .catch(() => {});
+  await pause(300);
+  check(posted.length === 0 && (await page.$$eval("#map rect.cell", (r) => r.length)) === 9,
+        "Back to the same view but its selection computes nothing again (posted: " + posted.join(" ") + ")");
+  // while a map runs, its CSV is not the previous map's; a map answered at
+  // once (no Prefer, as a daemon without jobs answers) is cancelled at once
+  const downloadsBefore = ended.length, errorsBefore = consoleErrors.length;
+  rules.push({ method: "POST", path: /^\/map$/, noPrefer: true });
+  await page.$eval("#map-form input[name=xn]", (e) => { e.value = "30"; });
+  await page.$eval("#map-form input[name=yn]", (e) => { e.value = "30"; });
+  await page.$eval("#map-form input[name=max_period]", (e) => { e.value = "4"; });
+  await page.click("#map-form button[type=submit]");
+  await page.click("figure[data-name='map'] .export-csv");
+  await pause(800);
+  check(ended.length === downloadsBefore && consoleErrors.length === errorsBefore,
+        "a map's CSV while it runs: no download of the previous map, no error (" +
+        consoleErrors.slice(errorsBefore).join("; ") + ")");
+  const tc = Date.now();
+  await page.click("#map-form .cancel").catch(() => {});
+  await page.waitForFunction(() => /cancelled/.test(document.querySelector("#map-panel .status").textContent),
+                             { timeout: 3000 }).catch(() => {});
+  check(/cancelled/.test(await text("#map-panel .status")) &&
+        !(await page.$eval("#map-form button[type=submit]", (b) => b.disabled)),
+        "Cancel ends a map the daemon answers at once, in " + (Date.now() - tc) + " ms: " + await text("#map-panel .status"));
+  // a single column of cells: the cell at its from, filling the frame
+  await page.$eval("#map-form input[name=xn]", (e) => { e.value = "1"; });
+  await page.$eval("#map-form input[name=yn]", (e) => { e.value = "2"; });
+  await page.$eval("#map-form input[name=max_period]", (e) => { e.value = "1"; });
+  await page.click("#map-form button[type=submit]");
+  await page.waitForFunction(() => document.querySelectorAll("#map .legend").length > 0, { timeout: 30000 });
+  const one = await page.$eval("#map rect.cell", (r) => Number(r.getAttribute("x")));
+  check(Math.abs(one - 54) < 1, "a map one cell wide: the cell fills the frame from its left edge (x = " + one + ")");
+  // a job's status lost once (the network): its results are still drawn
+  await page.$eval("#basins-form input[name=n]", (e) => { e.value = "16"; });
+  rules.push({ method: "GET", path: /^\/jobs\/[0-9a-f]+$/, fail: true });
+  await page.click("#basins-form button[type=submit]");
+  await page.waitForFunction(() => document.querySelector("#basins-form progress").hidden, { timeout: 30000 });
+  check(rules.length === 0 && Number(await page.$eval("#basins", (s) => s.dataset.painted)) === 16 &&
+        (await page.$eval("#basins-panel .error", (e) => e.hidden)),
+        "a job status lost on the way: the basins still drawn " + (await shown("#basins-panel .error")));
+  // a job store that cannot take the job (503 store-unavailable): asked again without Prefer
+  await page.$eval("#basins", (s) => { s.textContent = ""; s.dataset.painted = 0; });
+  rules.push({ method: "POST", path: /^\/basins$/, respond: {
+    status: 503, headers: { "Retry-After": "1" }, contentType: "application/problem+json",
+    body: JSON.stringify({ type: base + "/problems/store-unavailable", title: "Service Unavailable", status: 503 }) } });
+  await page.click("#basins-form button[type=submit]");
+  await page.waitForFunction(() => document.querySelector("#basins-form progress").hidden, { timeout: 30000 });
+  check(Number(await page.$eval("#basins", (s) => s.dataset.painted)) === 16,
+        "basins refused by the job store are computed at once " + (await shown("#basins-panel .error")));
+  // a busy daemon's 503 is tried again after its Retry-After
+  rules.push({ method: "POST", path: /^\/orbit$/, respond: {
+    status: 503, headers: { "Retry-After": "1" }, contentType: "application/problem+json",
+    body: JSON.stringify({ title: "Service Unavailable", status: 503, detail: "every compute slot is busy" }) } });
+  await page.click("#find");
+  await settled().catch(() => {});
+  check((await periods()) === paperPeriods && (await page.$eval("#error", (e) => e.hidden)),
+        "a 503 with Retry-After is tried again: " + (await periods()) + (await shown("#error")));
+  // two searches: the first held, the second's orbits stay
+  await page.$eval("input[name=ur]", (e) => { e.value = "0.5"; });
+  rules.push({ method: "POST", path: /^\/orbit$/, hold: 1200 });
+  await page.click("#find");
+  await page.$eval("input[name=ur]", (e) => { e.value = "0.6178"; });
+  await page.$eval("#find", (b) => { b.disabled = false; b.click(); });
+  await settled().catch(() => {});
+  await pause(1800);
+  check((await periods()) === paperPeriods && !(await page.$eval("#find", (b) => b.disabled)),
+        "of two searches in flight the last one's orbits are shown: " + (await periods()));
+  await page.setRequestInterception(false);
+  // Find resets the selection and the hidden curves, and so does the URL
+  await page.click("#orbits tbody tr[data-index='2']");
+  await page.click("#orbits tbody tr[data-index='1'] input[type=checkbox]");
+  await page.click("#find");
+  await settled().catch(() => {});
+  await pause(100);
+  const search = await page.evaluate(() => location.search);
+  check(!search.includes("hidden") && search.includes("selected=0"),
+        "after Find the URL's selection is the page's: " + search.replace(/.*(selected=[^&]*).*/, "$1"));
+  // the constraints of an orbit with several sticks: one line a stick
+  const several = direct.orbits.findIndex((o) => o.phases.filter((p) => p.mode === "stick").length > 1);
+  await page.click("#orbits tbody tr[data-index='" + several + "']");
+  const sticks = direct.orbits[several].phases.filter((p) => p.mode === "stick").length;
+  const f1 = await page.$$eval("#constraints polyline[data-name=F1]", (l) => l.length);
+  check(f1 === sticks, "orbit " + several + "'s F1 drawn as " + f1 + " lines, one a stick (" + sticks + ")");
+  // a trackpad's small wheel steps zoom a little
+  const span = () => page.evaluate(() => state.frames.r2.xr[1] - state.frames.r2.xr[0]);
+  const box2 = await (await page.$("#portrait2")).boundingBox();
+  const s0 = await span();
+  await page.mouse.move(box2.x + box2.width * 0.4, box2.y + box2.height * 0.5);
+  await page.mouse.wheel({ deltaY: 4 });
+  await pause(200);
+  const s1 = await span();
+  check(s1 !== s0 && Math.abs(s1 / s0 - 1) < 0.03, "a wheel step of 4 px zooms by " + ((s1 / s0 - 1) * 100).toFixed(1) + " %");
+  // a double click returns to the whole and leaves no simulation running
+  posted.length = 0;
+  await page.mouse.click(box2.x + box2.width * 0.4, box2.y + box2.height * 0.5, { clickCount: 2 });
+  await pause(1500);
+  const sims2 = posted.filter((u) => u === "/simulate").length;
+  check(sims2 <= 1, "a double click starts no simulation (" + sims2 + " /simulate sent)");
+
   // errors next to their panel
   await page.goto(base + "/?" + q, { waitUntil: "networkidle0" });
   await page.waitForFunction(() => document.querySelectorAll("#orbits tbody tr").length > 0, { timeout: 30000 });
@@ -318,6 +458,8 @@ try {
   await page.goto(base + "/?api=" + encodeURIComponent(other), { waitUntil: "networkidle0" });
   await page.waitForSelector("#error:not([hidden])", { timeout: 10000 }).catch(() => {});
   check(/--cors-origin/.test(await text("#error")), "a CORS failure says --cors-origin: " + await text("#error"));
+  const daemon = await text("#daemon").catch(() => "");
+  check(daemon.includes(other), "the header names the other daemon: " + daemon);
 
   // 4. physical units: continuation in Fr, its grazing at Fr = 6.1663
   await page.goto(base + "/?units=physical", { waitUntil: "networkidle0" });
@@ -436,6 +578,38 @@ try {
       e.getBoundingClientRect().right > window.innerWidth + 0.5).map((e) => e.tagName + "#" + e.id).slice(0, 5) }));
   check(wide.scroll <= 420 && wide.over.length === 0, "at 420 px nothing overflows: " + JSON.stringify(wide));
   await a11y.screenshot({ path: out + "/explorer-420.png", fullPage: true });
+
+  // axes over a span of one ulp (their ticks once looped for ever), on a
+  // page of its own that a hang does not take the others with
+  const tiny = await browser.newPage();
+  await tiny.goto(base + "/", { waitUntil: "domcontentloaded" });
+  const nticks = await Promise.race([
+    tiny.evaluate(() => {
+      const p = Plot.frame(document.getElementById("constraints"),
+                           { x: [0.6, 0.6000000000000001], y: [0, 1], exact: true, xlabel: "t", ylabel: "F" });
+      return p.svg.querySelectorAll(".axes text").length;
+    }),
+    new Promise((r) => setTimeout(() => r(-1), 3000))]);
+  check(nticks >= 0, "axes over a span of one ulp are drawn (" + nticks + " labels)");
+  if (nticks >= 0)
+    await tiny.close();
+
+  // the user's guide, served beside the explorer under a policy of its own
+  // (the explorer's once stopped mkdocs' inline scripts and styles)
+  const guide = await browser.newPage();
+  const refused = [];
+  guide.on("console", (m) => {
+    if (/Content Security Policy/i.test(m.text()))
+      refused.push(m.text());
+  });
+  guide.on("pageerror", (e) => refused.push(e.message));
+  const res = await guide.goto(base + "/docs/", { waitUntil: "networkidle0" });
+  if (res.status() === 200)
+    check(refused.length === 0, "the guide at /docs/ runs its scripts and styles: " +
+          refused.slice(0, 2).join("; "));
+  else
+    console.log("explorer: no guide in this build (/docs/ answered " + res.status() + ")");
+  await guide.close();
 
   console.log("explorer: loaded with the paper's orbit in " + loadMs + " ms; all in " +
               Math.round((Date.now() - t00) / 1000) + " s");
