@@ -144,8 +144,15 @@ async function job(path, body, ctl, progress, onLine) {
   const headers = { "Content-Type": "application/json", Prefer: "respond-async" };
   if (onLine)
     headers.Accept = "application/x-ndjson";
-  const opts = { method: "POST", headers, body: JSON.stringify(body), signal: ctl.abort.signal };
-  let res;
+  /* Cancel aborts a request answered at once (the daemon stops when the
+   * connection closes); a request that may create a job gets a second to
+   * answer first, so that the job it made is known, and deleted */
+  const request = new AbortController();
+  ctl.abort.signal.addEventListener("abort", () => {
+    setTimeout(() => request.abort(), headers.Prefer ? 1000 : 0);
+  }, { once: true });
+  const opts = { method: "POST", headers, body: JSON.stringify(body), signal: request.signal };
+  let res, loc, st;
   try {
     res = await send(path, opts);
     if (res.status === 503) {
@@ -156,17 +163,18 @@ async function job(path, body, ctl, progress, onLine) {
       delete headers.Prefer;
       res = await send(path, opts);
     }
-    /* answered at once: Cancel aborts the fetch */
     if (res.status === 200)
       return await (onLine ? eachLine(res, onLine) : res.text());
+    if (res.status !== 201)
+      throw await failure(res);
+    loc = res.headers.get("Location");
+    ctl.location = loc;
+    if (ctl.cancelled)
+      throw (await dismiss(loc)) || new Cancelled();
+    st = await res.json();
   } catch (e) {
     throw e.name === "AbortError" ? new Cancelled() : e;
   }
-  if (res.status !== 201)
-    throw await failure(res);
-  const loc = res.headers.get("Location");
-  let st = await res.json();
-  ctl.location = loc;
   if (onLine)
     return streamJob(loc, st, ctl, progress, onLine);
   for (;;) {
@@ -800,13 +808,19 @@ async function continueFamily() {
   status("family", "continuing...");
   state.figures.family = null;
   f.querySelector("button").disabled = true;
+  /* a newer family (Continue again, Back) aborts this one */
+  stopWork("family");
+  const ctl = state.work.family = { cancelled: false, abort: new AbortController() };
+  const current = () => state.work.family === ctl;
   try {
     const ans = await post("/continue", Object.assign({}, state.params, {
       guess: { durations: o.phases.map((q) => q.duration), modes: o.phases.map((q) => q.mode) },
       parameter: f.parameter.value,
       range: [Number(f.from.value), Number(f.to.value)],
       fields: ["period", "stable"],
-    }));
+    }), ctl.abort.signal);
+    if (!current())
+      return;
     const pts = ans.branches.flatMap((b) => b.points);
     const rows = [];
     ans.branches.forEach((b, k) => b.points.forEach((q) => rows.push([k, q.value, q.period, q.stable])));
@@ -841,10 +855,15 @@ async function continueFamily() {
     status("family", "family: " + pts.length + " points, " +
            ans.branches.reduce((k, b) => k + b.special.length, 0) + " special points");
   } catch (e) {
+    if (!current())
+      return;
     status("family", "");
     showError("family", e);
   } finally {
-    f.querySelector("button").disabled = false;
+    if (current() || !state.work.family) {
+      state.work.family = null;
+      f.querySelector("button").disabled = false;
+    }
   }
 }
 
@@ -891,7 +910,8 @@ async function longWork(id, what, work) {
       showError(id, e);
     }
   } finally {
-    if (current()) {
+    /* the panel back to idle unless a newer run has it */
+    if (current() || !state.work[id]) {
       state.work[id] = null;
       go.disabled = false;
       cancel.hidden = true;
@@ -1058,7 +1078,7 @@ async function basins() {
   if (!state.params)
     return showError("basins", new Problem(0, { detail: "find orbits first" }));
   /* no more cells a side than the figure has pixels: the rest is not seen */
-  const most = Math.max(...Plot.inner($("#basins"), 150));
+  const most = Math.min(...Plot.inner($("#basins"), 150));
   if (Number(f.n.value) > most)
     f.n.value = most;
   const n = Number(f.n.value);
@@ -1242,10 +1262,16 @@ async function showURL() {
     status(id, "");
     clearError(id);
   }
-  await findOrbits(view);
+  /* a newer view (Back again, Find) ends this one's work */
+  const mine = shownView;
+  if (!(await findOrbits(view)))
+    return;
   const runs = { family: continueFamily, map: existenceMap, basins };
-  for (const id of view.open)
+  for (const id of view.open) {
+    if (shownView !== mine)
+      return;
     await runs[id]();
+  }
 }
 
 $("#units").addEventListener("change", (e) => {

@@ -7,7 +7,9 @@
  * finiteness, range and limit, writes it to its destination, and echoes the
  * request back.  Every failure names the field by its JSON pointer.  A
  * missing required field is an error, never a zero; an unknown field is an
- * error, never ignored.
+ * error, never ignored, except in an object the daemon answered with and a
+ * client sends back (an orbit: API_OTHER_KEYS), whose other keys are the
+ * daemon's own or the client's notes.
  */
 #include <ctype.h>
 #include <math.h>

@@ -130,7 +130,8 @@ enum { API_N_DIMENSIONLESS = SS_PARAM_V + 1 };
   { name, API_T_ANY }
 
 /* Any other key of the object accepted and ignored: an object the daemon
- * answered with, sent back, stays open. */
+ * answered with, sent back, stays open (its own objects, such as an orbit's
+ * phases, keep their specs). */
 #define API_OTHER_KEYS API_ANY("*")
 
 /* The fields of an orbit object, as /orbit or /basins returns it, so that a

@@ -4,6 +4,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include <ctype.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -210,7 +211,7 @@ static void respond(api_response *out, api_problem_kind kind,
   out->status = row->status;
   out->body = api__json_dumps(o, JSON_COMPACT | JSON_ENSURE_ASCII);
   out->len = out->body ? strlen(out->body) : 0;
-  if (out->body && limit && limit[0]) {
+  if (out->body && limit && limit[0] && isfinite(limit_value)) {
     /* the limit's value last, in its shortest digits as every number of
      * the API (jansson would write 0.3 as 0.29999999999999999) */
     char num[32];
