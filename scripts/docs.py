@@ -33,7 +33,7 @@ def schema_type(s):
     """A schema's type as a reader says it: number, array of Orbit, ..."""
     if "$ref" in s:
         name = s["$ref"].rsplit("/", 1)[1]
-        return "[%s](#%s)" % (name, name.lower())
+        return "[%s](#schema-%s)" % (name, name.lower())
     for key in ("oneOf", "anyOf"):
         if key in s:
             return " or ".join(schema_type(x) for x in s[key])
@@ -115,7 +115,8 @@ def http_reference(spec):
         out.append("")
     out += ["## Schemas", ""]
     for name, s in doc["components"]["schemas"].items():
-        out += ["### %s {#%s}" % (name, name.lower()), ""]
+        # schema-: an operation and a schema may share a name (stability)
+        out += ["### %s {#schema-%s}" % (name, name.lower()), ""]
         if s.get("description"):
             out += [cell(s["description"]), ""]
         props = s.get("properties")
@@ -131,6 +132,11 @@ def http_reference(spec):
                 k, schema_type(p), "yes" if k in req else "",
                 "; ".join(x for x in (what, extra) if x)))
         out.append("")
+    anchors = re.findall(r"\{#([^}]+)\}", "\n".join(out))
+    twice = sorted({a for a in anchors if anchors.count(a) > 1})
+    if twice:
+        raise SystemExit("docs: the HTTP reference has anchors twice: %s" %
+                         ", ".join(twice))
     return "\n".join(out)
 
 # ---- the C reference, from the header's comments ---------------------------

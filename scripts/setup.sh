@@ -25,8 +25,10 @@ pkgs=(build-essential cmake pkg-config libmicrohttpd-dev libjansson-dev libgsl-d
 # mkdocs builds the user's guide that the daemon serves at /docs/; the build
 # goes on without it (and serves none), so as another user it is only
 # said.  Pinned by the release: Debian 12 ships mkdocs 1.4.2, which
-# mkdocs.yml and its built-in theme are written for.
-extras=(mkdocs)
+# mkdocs.yml and its built-in theme are written for.  python3-venv: the
+# README installs the Python client in a venv (Debian's pip refuses to
+# install into the system's Python).
+extras=(mkdocs python3-venv)
 if [ "${1:-}" = --test ]; then
   extras+=(prometheus nginx openssl python3 python3-jsonschema systemd chromium postgresql)
   extras+=(python3-matplotlib)
