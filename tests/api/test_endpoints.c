@@ -20,7 +20,7 @@
 #include "stickslip_api.h"
 #include "test.h"
 
-/* EVIDENCE: README "Layout": the endpoint table is the only list of
+/* EVIDENCE: docs/develop.md: the endpoint table is the only list of
  * endpoints, and the OpenAPI document agrees with it */
 static void test_spec_and_table(void) {
   json_t *spec = json_loads(api_openapi_json(), 0, NULL);
@@ -97,7 +97,7 @@ static void test_spec_and_table(void) {
   json_decref(spec);
 }
 
-/* EVIDENCE: README "Layout": each computing endpoint has codec cases */
+/* EVIDENCE: docs/develop.md: each computing endpoint has codec cases */
 static void test_cases_cover_table(const char *dir) {
   for (size_t i = 0; i < api_endpoint_count(); i++) {
     const api_endpoint *row = api_endpoint_at(i);
@@ -118,7 +118,7 @@ static void test_cases_cover_table(const char *dir) {
   }
 }
 
-/* EVIDENCE: README "Errors": every problem type has one HTTP status, and
+/* EVIDENCE: docs/api/errors.md: every problem type has one HTTP status, and
  * the OpenAPI document lists exactly the types the table has */
 static void test_problem_table(void) {
   json_t *spec = json_loads(api_openapi_json(), 0, NULL);
@@ -306,7 +306,7 @@ static int http_of(int status) {
   return st;
 }
 
-/* EVIDENCE: README "Errors": a failure of the core leaves as one row of the
+/* EVIDENCE: docs/api/errors.md: a failure of the core leaves as one row of the
  * table whatever endpoint met it; a status missing from it is internal */
 static void test_status_table(void) {
   ASSERT_EQ_INT(http_of(SS_EDOMAIN), 422);
@@ -357,7 +357,7 @@ static char *streamed(size_t ep, const char *body, size_t step, size_t *n) {
   return out;
 }
 
-/* EVIDENCE: README "Limits": a streamed answer is the same bytes as the
+/* EVIDENCE: docs/howto/limits.md: a streamed answer is the same bytes as the
  * answer written whole, however it is read */
 static void test_streams(void) {
   static const char *const bodies[][2] = {
@@ -419,7 +419,7 @@ static char *read_all(api_stream *s, size_t step) {
   return out;
 }
 
-/* EVIDENCE: README "Batches": an item's line carries the answer its body
+/* EVIDENCE: docs/api/batch.md: an item's line carries the answer its body
  * gets when posted alone; a bad item gets its own line, with a pointer into
  * the item, and the others go on; the last line counts them */
 /* A batch's body is checked in its text, item by item, where it can be:
@@ -592,7 +592,7 @@ static void test_batch(void) {
   }
 }
 
-/* EVIDENCE: README "POST /continue": "fields" chooses the per-point fields
+/* EVIDENCE: docs/api/continue.md: "fields" chooses the per-point fields
  * (value always comes); a client that asks for the parameter and the
  * period gets nothing else per point */
 static void test_continue_fields(void) {

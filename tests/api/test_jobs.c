@@ -403,7 +403,7 @@ static double open_time(size_t n, size_t *bytes) {
   return best;
 }
 
-/* EVIDENCE: README "Jobs": a sweep of a great many items is one request:
+/* EVIDENCE: docs/api/jobs.md: a sweep of a great many items is one request:
  * its job opens in a time proportional to its body.  100 000 items (13 MB)
  * open in about 0.5 s on a quiet machine; the check is on the growth (4
  * times the items in about 4 times the time, where a quadratic step would
@@ -586,7 +586,7 @@ static long progress_of(const api_job_info *in) {
   return p;
 }
 
-/* EVIDENCE: README "Jobs" / OGC API - Processes statusInfo: the status
+/* EVIDENCE: docs/api/jobs.md / OGC API - Processes statusInfo: the status
  * document's fields, its times in RFC 3339 UTC, its links */
 static void test_status(void) {
   static const char ID[] = "0123456789abcdef0123456789abcdef";
@@ -652,7 +652,7 @@ static void test_status(void) {
   ASSERT_EQ_INT(progress_of(&in), 50);
 }
 
-/* EVIDENCE: README "Jobs": GET /jobs, newest first, paged */
+/* EVIDENCE: docs/api/jobs.md: GET /jobs, newest first, paged */
 static void test_list(void) {
   api_job_info jobs[3];
   static const char *const IDS[] = {"0000000000000000000000000000000a",

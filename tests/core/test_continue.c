@@ -104,7 +104,7 @@ static double ref_switching_margin(const ss_params *p, const ss_cont_point *pt,
   return -p->ur - p->chi * (ev[0].x[1] - ev[0].x[0]);
 }
 
-/* EVIDENCE: README "Families": the paper's overshoot orbit continued in
+/* EVIDENCE: docs/checked/families.md: the paper's overshoot orbit continued in
  * ur; every point closes and its multipliers match the finite-difference
  * Jacobian; the family ends below at the grazing of (3.2) at the end of
  * slip, located to 1e-10, where the rk8pd reference shows the margin at
@@ -169,7 +169,7 @@ static void test_ur_family(void) {
   ss_branch_free(&b);
 }
 
-/* EVIDENCE: README "Families": the overshoot family in chi at ur = 12 us
+/* EVIDENCE: docs/checked/families.md: the overshoot family in chi at ur = 12 us
  * loses and regains stability through two period doublings, each located
  * to 1e-10 where the finite-difference Jacobian of the simulated map has a
  * multiplier within 1e-6 of -1; the family ends at a grazing at both ends */
@@ -270,7 +270,7 @@ static void test_period_doubling(void) {
   ss_branch_free(&b);
 }
 
-/* EVIDENCE: README "Families": bad options are refused, never guessed */
+/* EVIDENCE: docs/checked/families.md: bad options are refused, never guessed */
 static void test_bad_options(void) {
   ss_orbit start;
   ASSERT_EQ_INT(overshoot_at(&PAPER, &start), 1);
@@ -306,7 +306,7 @@ static void test_bad_options(void) {
   ASSERT_EQ_INT(ss_param_by_name("v", &id), SS_EINVAL);
 }
 
-/* EVIDENCE: README "Families": the time budget stops a continuation with
+/* EVIDENCE: docs/checked/families.md: the time budget stops a continuation with
  * what it found */
 static int always(void *cls) {
   (void)cls;
@@ -334,8 +334,8 @@ static void test_budget(void) {
   ss_branch_free(&b);
 }
 
-/* EVIDENCE: README "Families": the grazing that bounds the paper's family
- * followed in chi draws the boundary ur*(chi) of the overshoot orbit's
+/* EVIDENCE: docs/checked/families.md: the grazing that bounds the paper's
+ * family followed in chi draws the boundary ur*(chi) of the overshoot orbit's
  * existence; at every point the orbit solved 1e-7 either side in ur exists
  * on one side only, and the rk8pd reference gives the switching margin at
  * zero */
@@ -446,7 +446,7 @@ static void test_grazing_curve(void) {
   ss_branch_free(&b);
 }
 
-/* EVIDENCE: README "Families": beyond the grazing that ends a family the
+/* EVIDENCE: docs/checked/families.md: beyond the grazing that ends a family the
  * motion settles, by simulation, on a periodic attractor, which the rk8pd
  * reference closes over its period through the same number of phases */
 static void check_beyond(const ss_params *p, ss_param_id id, double lo,
@@ -518,7 +518,7 @@ static void test_beyond(void) {
   check_beyond(&p, SS_PARAM_CHI, 0.01, 0.99);
 }
 
-/* EVIDENCE: README "Families": the paper's family continued in us loses
+/* EVIDENCE: docs/checked/families.md: the paper's family continued in us loses
  * its stability at a Neimark-Sacker point, where the finite-difference
  * Jacobian of the simulated map has a complex pair on the unit circle */
 static void test_neimark_sacker(void) {
@@ -563,8 +563,8 @@ static void test_neimark_sacker(void) {
   ss_branch_free(&b);
 }
 
-/* EVIDENCE: README "Families": a family followed around a fold comes back:
- * the stick-slip family at ur = 12 us turns back in chi at a saddle-node,
+/* EVIDENCE: docs/checked/families.md: a family followed around a fold comes
+ * back: the stick-slip family at ur = 12 us turns back in chi at a saddle-node,
  * where the finite-difference Jacobian of the simulated map has a
  * multiplier of +1, and the orbit changes continuously through the turn */
 static void test_fold(void) {
@@ -642,7 +642,7 @@ static void test_fold(void) {
   ss_branch_free(&b);
 }
 
-/* EVIDENCE: README "Families": a real multiplier crosses +1 where the
+/* EVIDENCE: docs/checked/families.md: a real multiplier crosses +1 where the
  * family does not turn (the stick-slip family of period 30.6 continued as
  * /continue does, through ss_continue_study): the saddle-node is located to
  * 1e-10 where the finite-difference Jacobian of the simulated map has a real
@@ -717,7 +717,7 @@ static void test_saddle_node_without_fold(void) {
   }
 }
 
-/* EVIDENCE: README "Families": a period doubling followed in a second
+/* EVIDENCE: docs/checked/families.md: a period doubling followed in a second
  * parameter: at every point of the curve the orbit is feasible and the
  * finite-difference Jacobian of the simulated map has a multiplier -1 */
 static void test_period_doubling_curve(void) {
@@ -782,10 +782,10 @@ static void test_period_doubling_curve(void) {
   ss_branch_free(&b);
 }
 
-/* EVIDENCE: README "Families": continuation in a physical parameter; Fr is
- * ur (k1 + k2), so the paper's boundary in Fr is ten times the one in ur;
- * a family in m1 (which moves eta, V and the time scale together) closes
- * by simulation at every point */
+/* EVIDENCE: docs/checked/families.md: continuation in a physical parameter; Fr
+ * is ur (k1 + k2), so the paper's boundary in Fr is ten times the one in ur; a
+ * family in m1 (which moves eta, V and the time scale together) closes by
+ * simulation at every point */
 static void test_physical(void) {
   ss_physical ph = {2.5, 0.625, 8, 2, 0.724, 6.178, 2};
   ss_params p;
@@ -892,7 +892,7 @@ static double ref_interior_max(const ss_params *p, const ss_mode *modes,
   return best;
 }
 
-/* EVIDENCE: README "Families": a grazing inside a phase (the stick force
+/* EVIDENCE: docs/checked/families.md: a grazing inside a phase (the stick force
  * touching ur in the middle of a stick) followed in a second parameter:
  * at every point the orbit exists on one side only in the first, and the
  * rk8pd reference puts the stick force's maximum on ur */
@@ -1138,7 +1138,7 @@ static int tangency_case(const ss_params *p, double pmin, double pmax,
   return by_slope;
 }
 
-/* EVIDENCE: README "Families": a phase that ends tangentially (the stick
+/* EVIDENCE: docs/checked/families.md: a phase that ends tangentially (the stick
  * force reaching ur at its maximum, at the stick's end) is located at the
  * zero of the end slope and followed in a second parameter; the rk8pd
  * reference gives a zero slope there, and at every point of the curve the
@@ -1207,7 +1207,7 @@ static void test_transversality_curve(void) {
   ASSERT_EQ_INT(seen, 1);
 }
 
-/* EVIDENCE: README "Families": a phase that ends tangentially: orbits
+/* EVIDENCE: docs/checked/families.md: a phase that ends tangentially: orbits
  * whose stick ends with a slope too small for the event finder to tell
  * the crossing from a touch by the values (the band, 3e-7 to 1e-8 below
  * the end here) are accepted by the slope, judged against its own rounding
@@ -1573,7 +1573,7 @@ typedef struct study_case {
   study_count want; /* at least */
 } study_case;
 
-/* EVIDENCE: README "Families": one call, ss_continue_study, gives the
+/* EVIDENCE: docs/checked/families.md: one call, ss_continue_study, gives the
  * family and what its special points lead to, the same to the bit as the
  * separate calls it stands for, on families that end at grazings (of the
  * switching condition, inside a phase, of a phase's end, one not located
@@ -1690,7 +1690,7 @@ static void test_study(void) {
   }
 }
 
-/* EVIDENCE: README "Families": what ss_continue_study does besides the
+/* EVIDENCE: docs/checked/families.md: what ss_continue_study does besides the
  * family is what its options ask; a family in a physical parameter is
  * followed nowhere and has no beyond; a cancel stops it with what it
  * found; ss_study_free is NULL-safe and zeroes */

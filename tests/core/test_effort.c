@@ -86,7 +86,7 @@ static int check_set(const ss_params *p, unsigned kinds, int *found) {
   return missing;
 }
 
-/* EVIDENCE: README "How it works, and how it is checked": a higher
+/* EVIDENCE: docs/checked/index.md: a higher
  * effort returns every orbit a lower one does, here where it did not. */
 static void test_short_stick(void) {
   ss_params p = {0.3035, 0.2236, 0.0399, 0.2567, 1};
@@ -115,7 +115,7 @@ static void test_short_stick(void) {
   ASSERT_EQ_INT(check_set(&p, SS_ORBIT_STICKSLIP, &found), 0);
 }
 
-/* EVIDENCE: README "How it works, and how it is checked": a higher
+/* EVIDENCE: docs/checked/index.md: a higher
  * effort returns every orbit a lower one does, on a draw of its own. */
 static void test_draw(int sets) {
   static const unsigned kinds[4] = {SS_ORBIT_ALL, SS_ORBIT_OVERSHOOT,

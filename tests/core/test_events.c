@@ -51,7 +51,7 @@ static void shifted_cos(ss_trig *g, int k, double amp, double w, double s) {
   g->b[k] = amp * sin(w * s);
 }
 
-/* EVIDENCE: README "How it works, and how it is checked" (certified event
+/* EVIDENCE: docs/checked/index.md (certified event
  * location): "Tested on a root 1e-10 after the start"; and stickslip.h
  * ss_trig_first_root (Start): g(t0) within tol of zero starts the search just
  * after t0 if g leaves downward, and t0 is the root if it rises. */
@@ -74,7 +74,7 @@ static void test_immediate(void) {
   ASSERT_NEAR(t, M_PI, 1e-14);
 }
 
-/* EVIDENCE: README "How it works, and how it is checked" (certified event
+/* EVIDENCE: docs/checked/index.md (certified event
  * location): "no first root is skipped however close two roots are", tested
  * on "pairs of roots 1.3e-6 apart" (here down to that separation). */
 static void test_close_roots(void) {
@@ -96,7 +96,7 @@ static void test_close_roots(void) {
   }
 }
 
-/* EVIDENCE: README "How it works, and how it is checked" (certified event
+/* EVIDENCE: docs/checked/index.md (certified event
  * location): "a maximum within that tolerance is a tangency (grazing)";
  * stickslip.h ss_trig_first_root: a tangency is SS_GRAZING. */
 static void test_grazing(void) {
@@ -127,7 +127,7 @@ static void test_grazing(void) {
   ASSERT_NEAR(t, oracle_root(&g, tm + 0.1, 30, 1e-4), 1e-12);
 }
 
-/* EVIDENCE: README "The model" (grazing): "A near miss farther than the
+/* EVIDENCE: docs/model.md (grazing): "A near miss farther than the
  * tolerance from zero is passed over"; README "How it works, and how it is
  * checked": tested on "near misses 1e-9 to 1e-13 below zero". */
 static void test_near_miss(void) {
@@ -166,7 +166,7 @@ static void test_near_miss(void) {
   }
 }
 
-/* EVIDENCE: README "How it works, and how it is checked" (certified event
+/* EVIDENCE: docs/checked/index.md (certified event
  * location): tested on "functions with no root"; stickslip.h
  * ss_trig_first_root: SS_NEVER when g can never reach zero, SS_HORIZON when it
  * does not before tmax. */

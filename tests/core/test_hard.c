@@ -19,9 +19,9 @@ static ref_params refp(const ss_model *m) {
   return r;
 }
 
-/* EVIDENCE: README "Hard cases": grazing: a slip whose velocity touches V
- * tangentially, checked by rk8pd: integrating the slip from the start
- * reaches x2' = V with x2'' = 0 at the reported time. */
+/* EVIDENCE: docs/checked/hard-cases.md: grazing: a slip whose velocity touches
+ * V tangentially, checked by rk8pd: integrating the slip from the start reaches
+ * x2' = V with x2'' = 0 at the reported time. */
 static void test_slip_grazing_rk8pd(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -49,7 +49,7 @@ static void test_slip_grazing_rk8pd(void) {
   ss_sim_free(s);
 }
 
-/* EVIDENCE: README "Hard cases": a stick whose force touches ur without
+/* EVIDENCE: docs/checked/hard-cases.md: a stick whose force touches ur without
  * crossing */
 static void test_stick_grazing(void) {
   ss_model m;
@@ -112,7 +112,7 @@ static void slip_taylor(const ss_model *m, const double x[4], long double t,
   }
 }
 
-/* EVIDENCE: README "Hard cases": a phase lasting about 1e-9 */
+/* EVIDENCE: docs/checked/hard-cases.md: a phase lasting about 1e-9 */
 static void test_short_phases(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -159,8 +159,8 @@ static void test_short_phases(void) {
   ss_sim_free(s);
 }
 
-/* EVIDENCE: README "Hard cases": slip -> overshoot -> slip with no stick,
- * against rk8pd */
+/* EVIDENCE: docs/checked/hard-cases.md: slip -> overshoot -> slip with no
+ * stick, against rk8pd */
 static void test_slip_overshoot_slip(void) {
   ss_params p = {0.2, 4.0, 0.0724, 0.3, 1.0};
   ss_model m;
@@ -201,8 +201,9 @@ static void test_slip_overshoot_slip(void) {
   ASSERT_TRUE(found);
 }
 
-/* EVIDENCE: README "Hard cases": parameters at the edges: each run agrees with
- * the rk8pd reference event by event, and the orbit search returns */
+/* EVIDENCE: docs/checked/hard-cases.md: parameters at the edges: each run
+ * agrees with the rk8pd reference event by event, and the orbit search returns
+ */
 static void test_edges(void) {
   const struct {
     const char *what;
@@ -303,7 +304,7 @@ static void test_no_drift(void) {
          returns, drift, tdrift, ss_sim_time(s));
   ASSERT_EQ_INT(n, 1000000);
   ASSERT_TRUE(drift < 1e-12);
-  /* EVIDENCE: README "How it works, and how it is checked" (simulation): it
+  /* EVIDENCE: docs/checked/index.md (simulation): it
    * "keeps absolute time as a double-double sum"; stickslip.h ss_sim: "so that
    * event times stay accurate after 10^6 events": the returns fall at k T to
    * within the rounding of T itself (k up to 333333, T to ~1e-15 relative:

@@ -227,7 +227,7 @@ static void test_threads(void) {
   ss_map_free(&b);
 }
 
-/* EVIDENCE: README "POST /map": by default (search_every 0 here, 1 in the
+/* EVIDENCE: docs/api/map.md: by default (search_every 0 here, 1 in the
  * API) the full search runs at every cell, so every cell is complete, on a
  * sweep where no orbit exists as on one where a family lives (ur across the
  * overshoot family's grazing). */
@@ -250,7 +250,7 @@ static void test_default_every_cell(void) {
   ss_map_free(&map);
 }
 
-/* EVIDENCE: README "POST /map": the lattice of full searches is spread
+/* EVIDENCE: docs/api/map.md: the lattice of full searches is spread
  * evenly from the first cell to the last, at most search_every apart: on a
  * sweep where no orbit exists (ur below the overshoot family's grazing, so
  * no search where a family ends), the complete cells are the lattice. */
@@ -299,7 +299,7 @@ static int has_near(const ss_map_cell *c, const ss_map_orbit *q) {
   return 0;
 }
 
-/* EVIDENCE: README "POST /map": a full search runs where a neighbour's
+/* EVIDENCE: docs/api/map.md: a full search runs where a neighbour's
  * orbit does not continue into a cell that holds no orbit near it when
  * the spreading is done; not where such an orbit arrives from another
  * neighbour later in the spreading.  On the 20x20 overshoot map, every cell

@@ -2,7 +2,7 @@
  * test_map_kinds.c: maps of every kind, cell by cell, against the separate
  * search at each cell.
  *
- * EVIDENCE: README "Maps" — by default a map holds, in every cell, every
+ * EVIDENCE: docs/api/map.md — by default a map holds, in every cell, every
  * orbit /orbit with the map's kind, max_period and effort finds there; with
  * search_every 8 it holds it wherever the family of that orbit reaches a
  * cell the map holds it in.

@@ -95,7 +95,7 @@ static void test_modal_data(void) {
 
 static const ref_opts TIGHT = {NULL, 1e-14, 1e-14, 0, 0};
 
-/* EVIDENCE: README "How it works, and how it is checked" (closed forms):
+/* EVIDENCE: docs/checked/index.md (closed forms):
  * "Checked against GSL rk8pd at tolerance 1e-14 on five parameter sets and
  * three states in each mode" (README: largest difference 1.2e-13 relative to
  * 1 + |d0|; asserted here to 1e-10). */

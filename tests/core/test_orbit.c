@@ -61,11 +61,10 @@ static void verify(const ss_model *m, const ss_orbit *o, const char *what) {
   ASSERT_TRUE(o->residual < 1e-12);
 }
 
-/* EVIDENCE: README "The paper's orbit, and where this differs from the printed
- * values": the overshoot orbit of the paper's data set, found with no guess;
- * "Durations and the start state agree to two or three digits"; "The
- * eigenvalues differ most (imaginary part 0.0935 against 0.0821)"; "the orbit
- * is stable either way". */
+/* EVIDENCE: docs/checked/paper.md: the overshoot orbit of the paper's data set,
+ * found with no guess; "Durations and the start state agree to two or three
+ * digits"; "The eigenvalues differ most (imaginary part 0.0935 against
+ * 0.0821)"; "the orbit is stable either way". */
 static void test_paper(void) {
   ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
   ss_model m;
@@ -93,9 +92,8 @@ static void test_paper(void) {
   ASSERT_NEAR(ov->stab.eig_re[0], 0.1705, 0.002);
   ASSERT_NEAR(fabs(ov->stab.eig_im[0]), 0.0821, 0.012);
   ASSERT_TRUE(ov->stab.stable);
-  /* EVIDENCE: README "The paper's orbit, and where this differs from the
-   * printed values": "at the end of slip chi (x2 - x1) = -ur - 6.5e-4, so
-   * (3.2) holds with a margin of only 6.5e-4" */
+  /* EVIDENCE: docs/checked/paper.md: "at the end of slip chi (x2 - x1) = -ur
+   * - 6.5e-4, so (3.2) holds with a margin of only 6.5e-4" */
   ASSERT_TRUE(ov->switching.value > 0 && ov->switching.value < 1e-3);
   ASSERT_EQ_INT(ov->switching.phase, 0);
   printf("paper orbit: tau %.10f tau1 %.10f tau2 %.10f z0 %.10f %.10f %.10f "
@@ -125,7 +123,7 @@ static void test_paper(void) {
   ASSERT_TRUE(st.jac_diff < 1e-6);
 }
 
-/* EVIDENCE: README "How it works, and how it is checked" (feasibility): "An
+/* EVIDENCE: docs/checked/index.md (feasibility): "An
  * infeasible root is never returned; an empty answer says why (for example
  * the solution violates (3.2) at the end of slip ... for ur = 0.4)"; README
  * "The paper's orbit, and where this differs from the printed values": "for
@@ -179,7 +177,7 @@ static void test_violates_32(void) {
   }
 }
 
-/* EVIDENCE: README "How it works, and how it is checked" (periodic orbits):
+/* EVIDENCE: docs/checked/index.md (periodic orbits):
  * "period-k orbits and other sequences are found by Newton on the Poincare
  * map itself", the duration grid "finds unstable orbits"; stickslip.h
  * ss_orbit_find: stable orbits of any sequence and period, unstable ones from
@@ -265,7 +263,7 @@ static void test_sweep(void) {
   ASSERT_TRUE(total >= 430);
 }
 
-/* EVIDENCE: README "How it works, and how it is checked" (periodic orbits): the
+/* EVIDENCE: docs/checked/index.md (periodic orbits): the
  * analytic Jacobian of the duration equations against central differences, off
  * the solution, for the overshoot sequence and a five-phase one. */
 static void test_equation_jacobian(void) {
@@ -421,10 +419,9 @@ static void test_public_api(void) {
       SS_EINVAL);
 }
 
-/* EVIDENCE: README "The paper's orbit, and where this differs from the
- * printed values" is silent on this; the search lists each orbit once: a
- * period-1 orbit travelled twice is not a period-2 orbit.  At chi = 0.312,
- * ur = 12 us, the period-2 orbit born at the period doubling (period
+/* EVIDENCE: docs/checked/paper.md is silent on this; the search lists each
+ * orbit once: a period-1 orbit travelled twice is not a period-2 orbit.  At chi
+ * = 0.312, ur = 12 us, the period-2 orbit born at the period doubling (period
  * 19.2021) is listed, the overshoot and stick-slip orbits twice over are
  * not. */
 static void test_no_repetitions(void) {
@@ -472,7 +469,7 @@ static void test_no_repetitions(void) {
   }
 }
 
-/* EVIDENCE: README "POST /orbit": just below the grazing that ends the
+/* EVIDENCE: docs/api/orbit.md: just below the grazing that ends the
  * paper's family (ur = 0.616630036110) the motion settles on an attractor
  * of 7 turns and 19 phases, more than the 16 phases a sequence once held;
  * the search at max_period 8 returns it, and the rk8pd reference started

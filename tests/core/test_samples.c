@@ -308,7 +308,7 @@ static size_t check_curve(const ss_model *m, const double x0[4], double t_end,
   return n;
 }
 
-/* EVIDENCE: README "Samples placed for a curve": on the paper's orbit, one
+/* EVIDENCE: docs/api/simulate.md: on the paper's orbit, one
  * period, for eps from 1e-2 to 1e-6, in the four state variables and in the
  * (x2, x2') plane with per-axis scales (pixels): within eps, every event a
  * vertex twice, at most a third of the even samples; the stick in (x2, x2')
@@ -361,7 +361,7 @@ static double uniform(unsigned long long *s, double lo, double hi) {
   return lo + (hi - lo) * (double)(*s >> 11) / 9007199254740992.0;
 }
 
-/* EVIDENCE: README "Samples placed for a curve": the same on the orbits
+/* EVIDENCE: docs/api/simulate.md: the same on the orbits
  * of random parameter sets (all kinds, up to 2 turns), over one period and
  * over three. */
 static void test_random(void) {
@@ -394,7 +394,7 @@ static void test_random(void) {
   ASSERT_TRUE(orbits >= 8);
 }
 
-/* EVIDENCE: README "Samples placed for a curve": a curve nearly straight
+/* EVIDENCE: docs/api/simulate.md: a curve nearly straight
  * in its scaled coordinates (a stick with a small ripple, x1 and x2 scaled
  * up 300 and 8000 times): the part across a long chord is small against
  * the chord and must not be lost to rounding (it was, as |f|^2 - (f.e)^2,
@@ -411,7 +411,7 @@ static void test_straight(void) {
               "stick with a ripple");
 }
 
-/* EVIDENCE: README "Samples placed for a curve": random runs from random
+/* EVIDENCE: docs/api/simulate.md: random runs from random
  * states (half of them starting in a stick with a small ripple), random
  * tolerances 1e-1 to 1e-7, random axes and scales 1e-4 to 1e4: every one within
  * eps, every event a vertex. */
@@ -478,7 +478,7 @@ static void test_random_runs(void) {
   ASSERT_TRUE(runs >= 40);
 }
 
-/* EVIDENCE: README "Samples placed for a curve": the count is bounded by
+/* EVIDENCE: docs/api/simulate.md: the count is bounded by
  * max_samples (SS_ELIMIT_SAMPLES, the samples so far kept), and a bad
  * tolerance, scale or axis set, or a tolerance with even samples, is
  * SS_EINVAL. */

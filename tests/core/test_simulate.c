@@ -21,11 +21,10 @@ static ref_opts tight(void) {
   return o;
 }
 
-/* EVIDENCE: README "The paper's orbit, and where this differs from the printed
- * values": the paper's printed state is close to its orbit ("started there,
- * slip ends at 4.49768, not 4.5"): slip, overshoot and stick follow with
- * durations close to the printed tau, tau1, tau2, event by event as the rk8pd
- * reference has them. */
+/* EVIDENCE: docs/checked/paper.md: the paper's printed state is close to its
+ * orbit ("started there, slip ends at 4.49768, not 4.5"): slip, overshoot and
+ * stick follow with durations close to the printed tau, tau1, tau2, event by
+ * event as the rk8pd reference has them. */
 static void test_paper_run(void) {
   ss_model m;
   ss_model_init(&m, &PAPER, NULL);
@@ -137,7 +136,7 @@ static void test_battery(void) {
   ASSERT_TRUE(n_s2o > 0 && n_o2s > 0);
 }
 
-/* EVIDENCE: README "How it works, and how it is checked" (simulation):
+/* EVIDENCE: docs/checked/index.md (simulation):
  * "Scaling V, us, ur and the state by 1e-3 ... 1e4 leaves every event time
  * unchanged to 3e-14" (asserted here to 1e-12, with every state scaled). */
 static void test_scaling(void) {
@@ -177,7 +176,7 @@ static void test_scaling(void) {
   }
 }
 
-/* EVIDENCE: README "The model" (grazing): grazing in slip is reported, and the
+/* EVIDENCE: docs/model.md (grazing): grazing in slip is reported, and the
  * mass sticks */
 static void test_slip_grazing(void) {
   ss_model m;
@@ -209,7 +208,7 @@ static void test_slip_grazing(void) {
   ss_sim_result_free(&r);
 }
 
-/* EVIDENCE: README "The model" (grazing): a stick whose force touches ur is
+/* EVIDENCE: docs/model.md (grazing): a stick whose force touches ur is
  * reported and the stick goes on */
 static void test_stick_grazing(void) {
   ss_model m;
@@ -234,7 +233,7 @@ static void test_stick_grazing(void) {
   ss_sim_result_free(&r);
 }
 
-/* EVIDENCE: README "The model" (perpetual slip): recognised without searching
+/* EVIDENCE: docs/model.md (perpetual slip): recognised without searching
  */
 static void test_perpetual(void) {
   ss_model m;
@@ -398,7 +397,7 @@ static void test_samples_and_limits(void) {
   ASSERT_EQ_INT(ss_simulate(&m, x0, &o, &rs, NULL), SS_EINVAL);
 }
 
-/* EVIDENCE: README "How it works, and how it is checked" (simulation): "A run
+/* EVIDENCE: docs/checked/index.md (simulation): "A run
  * of 10^5 events completes" */
 static void test_long_run(void) {
   ss_model m;

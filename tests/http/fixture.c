@@ -77,7 +77,7 @@ void health_ok(const char *after) {
   http_free(&r);
 }
 
-/* EVIDENCE: README "Errors": bad input gets an application/problem+json
+/* EVIDENCE: docs/api/errors.md: bad input gets an application/problem+json
  * body with type, title, status, detail and, where a field is at fault, its
  * pointer.  The problem body of @a r, or NULL after a failure. */
 json_t *problem_body(const char *name, const http_resp *r, int want,

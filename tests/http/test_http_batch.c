@@ -119,7 +119,7 @@ static const char *str_at(json_t *j, const char *k1, const char *k2) {
   return json_is_string(v) ? json_string_value(v) : "";
 }
 
-/* EVIDENCE: README "Batches": an NDJSON line per item as it is done, a bad
+/* EVIDENCE: docs/api/batch.md: an NDJSON line per item as it is done, a bad
  * item answered by its own line while the others go on, a last line with
  * the counts, the batch refused as a whole only when it is not a list of
  * items, items in flight bounded, a hang-up cancelling the rest, and a
@@ -396,7 +396,7 @@ static void paths_allowed(const ndjson *nd, int index, char *out, size_t n) {
   snprintf(out, n, "%s", at ? at + 8 : "");
 }
 
-/* EVIDENCE: README "POST /batch": every path an item may ask, /map
+/* EVIDENCE: docs/api/batch.md: every path an item may ask, /map
  * included, answered on one line of the batch (a /map's lines as an array),
  * with the body it gets alone */
 static void test_every_path(void) {

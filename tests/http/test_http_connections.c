@@ -21,7 +21,7 @@ static int closed_by_server(int fd, int ms) {
   return recv(fd, &c, 1, 0) == 0;
 }
 
-/* EVIDENCE: README "Limits" (the table): per-IP connection limit and idle
+/* EVIDENCE: docs/howto/limits.md (the table): per-IP connection limit and idle
  * timeout */
 static void test_connection_limits(void) {
   daemon_proc d;
@@ -44,13 +44,13 @@ static void test_connection_limits(void) {
   ASSERT_EQ_INT(http_do(d.port, "GET", "/health", NULL, NULL, &r), 0);
   ASSERT_EQ_INT(r.status, 200);
   http_free(&r);
-  /* EVIDENCE: README "Limits" (Signals): SIGINT stops the daemon as SIGTERM
-   * does */
+  /* EVIDENCE: docs/howto/limits.md (Signals): SIGINT stops the daemon as
+   * SIGTERM does */
   ASSERT_EQ_INT(daemon_stop_with(&d, SIGINT), 0);
   unlink(d.log_path);
 }
 
-/* EVIDENCE: README "Limits" (Architecture): a connection that does not
+/* EVIDENCE: docs/howto/limits.md (Architecture): a connection that does not
  * deliver its request within --request-timeout is closed, while others are
  * served */
 static void test_slow_client(void) {

@@ -68,7 +68,7 @@ static void test_endpoints(void) {
     snprintf(p2, sizeof p2, "/orbits/0/x0/%d", i);
     ASSERT_NEAR(num(sim, p1), num(o, p2), 1e-12);
   }
-  /* EVIDENCE: README "POST /simulate": a final-state request gets no events or
+  /* EVIDENCE: docs/api/simulate.md: a final-state request gets no events or
    * samples */
   ASSERT_TRUE(!json_object_get(sim, "events") &&
               !json_object_get(sim, "samples"));

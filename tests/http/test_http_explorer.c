@@ -21,7 +21,7 @@ static int has_header_line(const char *raw, const char *name,
   return h && end && h < end;
 }
 
-/* EVIDENCE: README "The explorer": GET / is the page, its assets under
+/* EVIDENCE: docs/api/explorer.md: GET / is the page, its assets under
  * /explorer/, each with its media type, a validator and a lifetime (304 to
  * a client that has it); the page with a Content-Security-Policy that
  * allows only its own files. */
@@ -66,7 +66,7 @@ static void test_explorer_files(void) {
   http_free(&r);
 }
 
-/* EVIDENCE: README "The explorer" (CORS): with --cors-origin, a page of
+/* EVIDENCE: docs/api/explorer.md (CORS): with --cors-origin, a page of
  * that origin gets its preflight answered and may read every answer
  * (success, problem, streamed, batch) with the headers it needs; a page of
  * another origin gets no Access-Control header; Vary: Origin on all. */

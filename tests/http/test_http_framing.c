@@ -9,7 +9,7 @@
 
 #include "fixture.h"
 
-/* EVIDENCE: README "Limits" (Architecture): two Content-Length headers,
+/* EVIDENCE: docs/howto/limits.md (Architecture): two Content-Length headers,
  * Content-Length with Transfer-Encoding, or two Host headers are refused
  * with 400 and the connection is closed (none of these requests asks for
  * Connection: close).  A GET with a body is answered (stated nowhere). */

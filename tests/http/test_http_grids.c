@@ -45,7 +45,7 @@ static int threads_of(pid_t pid) {
   return n;
 }
 
-/* EVIDENCE: README "Limits": a computation's time, encoding included, is
+/* EVIDENCE: docs/howto/limits.md: a computation's time, encoding included, is
  * bounded by --max-seconds whatever the request's shape.  Before the budget
  * was polled inside a cell this answer took 84 s. */
 static void test_budget(void) {
@@ -122,7 +122,7 @@ static int threads_while(const daemon_proc *d, const char *path,
   return most;
 }
 
-/* EVIDENCE: README "Limits": a client computes on at most --client-workers
+/* EVIDENCE: docs/howto/limits.md: a client computes on at most --client-workers
  * threads, a /map's or a /basins' own threads included, and the pool on at
  * most --workers.  With a cap of 1 the request's own worker is all it gets
  * (--map-threads 2 used to start a second); with a cap of 2 it borrows one

@@ -48,7 +48,7 @@ static char *gunzip(const char *p, size_t n, size_t *out_len) {
   return out;
 }
 
-/* EVIDENCE: README "Operations": gzip for a client that accepts it, whole
+/* EVIDENCE: docs/howto/operations.md: gzip for a client that accepts it, whole
  * answers and streamed ones alike, and none for one that refuses it or for
  * a small answer. */
 static void test_gzip(void) {

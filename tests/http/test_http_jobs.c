@@ -116,7 +116,7 @@ static const char *status_str(json_t *j) {
 }
 
 /* Poll job @a id until it is finished (or @a seconds pass): its last
- * status.  EVIDENCE: README "Jobs": progress 0-100, monotone; a job goes
+ * status.  EVIDENCE: docs/api/jobs.md: progress 0-100, monotone; a job goes
  * accepted -> running -> successful (*running: running was seen). */
 static json_t *until_done(int port, const char *id, double seconds,
                           int *running) {
@@ -295,7 +295,7 @@ static double first_line(int port, const char *id, char **all) {
   return first;
 }
 
-/* EVIDENCE: README "Jobs": the results of a running /batch job stream:
+/* EVIDENCE: docs/api/jobs.md: the results of a running /batch job stream:
  * lines come before the job ends; ?wait=false gives the lines stored and
  * ends at once. */
 static void test_stream(int port, const char *batch, int items) {
@@ -325,7 +325,7 @@ static void test_stream(int port, const char *batch, int items) {
   free(all);
 }
 
-/* EVIDENCE: README "Jobs": DELETE of a running job: 200 with its status
+/* EVIDENCE: docs/api/jobs.md: DELETE of a running job: 200 with its status
  * dismissed, its results gone (404), and the daemon's CPU back to idle:
  * busy before (over a tenth of a core), and under a tenth of a core in the
  * half second that starts 100 ms after the DELETE's answer (the kernel
@@ -362,7 +362,7 @@ static void test_dismiss(const daemon_proc *d, const char *batch) {
   ASSERT_EQ_INT(st, 404);
 }
 
-/* EVIDENCE: README "Jobs": malformed ids 400, unknown 404
+/* EVIDENCE: docs/api/jobs.md: malformed ids 400, unknown 404
  * (problem+json); the list's paging parameters checked; the list newest
  * first. */
 static void test_ids(int port) {
@@ -410,7 +410,7 @@ static void test_ids(int port) {
   http_free(&r);
 }
 
-/* EVIDENCE: README "Jobs": a job is bound by --job-max-seconds; a job
+/* EVIDENCE: docs/api/jobs.md: a job is bound by --job-max-seconds; a job
  * whose chunk fails is failed, with its message, and its results are its
  * problem with its status. */
 static void test_failed(void) {
@@ -434,7 +434,7 @@ static void test_failed(void) {
   unlink(d.log_path);
 }
 
-/* EVIDENCE: README "Jobs": a daemon killed with SIGKILL mid-job and
+/* EVIDENCE: docs/api/jobs.md: a daemon killed with SIGKILL mid-job and
  * started again on the same store finishes the job: every item once, the
  * same answer as an uninterrupted run. */
 static void test_kill(const char *batch, int items, const char *want) {
@@ -468,7 +468,7 @@ static void test_kill(const char *batch, int items, const char *want) {
   unlink(d.log_path);
 }
 
-/* EVIDENCE: README "Jobs": a store that cannot be used gives 503
+/* EVIDENCE: docs/api/jobs.md: a store that cannot be used gives 503
  * store-unavailable with Retry-After to new jobs, while synchronous
  * requests are served: one that cannot be opened at the start, and one
  * whose file is deleted under the daemon. */
@@ -506,7 +506,7 @@ static void test_unavailable(const char *deleted) {
   unlink(d.log_path);
 }
 
-/* EVIDENCE: README "Jobs": a /batch job takes up to --max-job-items items,
+/* EVIDENCE: docs/api/jobs.md: a /batch job takes up to --max-job-items items,
  * past the synchronous --max-batch-items; more are refused at submission
  * with the limit's name. */
 static void test_job_items(void) {

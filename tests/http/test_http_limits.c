@@ -9,7 +9,7 @@
 
 #include "fixture.h"
 
-/* EVIDENCE: README "Limits": each per-request limit has its flag;
+/* EVIDENCE: docs/howto/limits.md: each per-request limit has its flag;
  * README "Errors": a limit that stops a request is a 422 limit-exceeded whose
  * limit and limit_value name it, a body over --max-body a 413, nesting
  * deeper than the limit a 400 invalid-json.  That a search over --max-orbits
@@ -109,7 +109,7 @@ static void test_flag_limits(void) {
   unlink(d.log_path);
 }
 
-/* EVIDENCE: README "Limits": --max-seconds bounds the compute time of a
+/* EVIDENCE: docs/howto/limits.md: --max-seconds bounds the compute time of a
  * request, and /simulate stops when it runs out; README "Errors": a 422
  * limit-exceeded that names max_seconds */
 static void test_time_limit(void) {

@@ -31,7 +31,7 @@ static double peak_rss_mib(pid_t pid) {
 static const char *BIG_SIM = "{" PAPER ",\"initial\":" X0 ",\"t_end\":10000,"
                              "\"samples\":{\"n\":100000}}";
 
-/* EVIDENCE: README "Limits": --memory-budget; large answers are streamed
+/* EVIDENCE: docs/howto/limits.md: --memory-budget; large answers are streamed
  * (chunked) from the result, and what answers in flight hold is bounded:
  * a client that never reads gets 503 once its share of the budget is
  * spent */

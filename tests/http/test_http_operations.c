@@ -21,7 +21,7 @@ static int is_hex16(const char *s) {
   return 1;
 }
 
-/* EVIDENCE: README "Operations": X-Request-Id taken or made, echoed in the
+/* EVIDENCE: docs/howto/operations.md: X-Request-Id taken or made, echoed in the
  * response and in a problem's body and in the access log line, which is
  * JSON; exact status codes, build and process metrics; a validator and a
  * lifetime for /openapi.json. */
@@ -166,7 +166,7 @@ static int env_daemon_status(const char *const *args) {
   return status;
 }
 
-/* EVIDENCE: README "Operations": every option from the environment, the
+/* EVIDENCE: docs/howto/operations.md: every option from the environment, the
  * command line winning; the plain log format. */
 static void test_environment(void) {
   ASSERT_EQ_INT(env_daemon_status(NULL), 413);
@@ -183,7 +183,7 @@ static void test_environment(void) {
   unlink(d.log_path);
 }
 
-/* EVIDENCE: README "Operations": /metrics passes `promtool check metrics`
+/* EVIDENCE: docs/howto/operations.md: /metrics passes `promtool check metrics`
  * (Prometheus's own linter) after requests of every kind of status; skipped
  * where promtool is not installed (scripts/setup.sh --test installs it). */
 static void test_promtool(void) {

@@ -8,7 +8,7 @@
 
 #include "fixture.h"
 
-/* EVIDENCE: README "POST /map": a complete cell holds what /orbit finds
+/* EVIDENCE: docs/api/map.md: a complete cell holds what /orbit finds
  * for its parameters, the others at least what /orbit finds there too on
  * this sweep (continued from their neighbours); the last line counts the
  * cells, and fields selects the orbits' fields.  By default (@a lattice
@@ -130,7 +130,7 @@ static void check_orbit_curve(const char *body, const char *what) {
   json_decref(o);
 }
 
-/* EVIDENCE: README "Samples placed for a curve": an orbit's curve spans
+/* EVIDENCE: docs/api/simulate.md: an orbit's curve spans
  * exactly its period, from slip, in the request's units (dimensionless and
  * physical alike), with only the columns asked for. */
 static void test_orbit_curves(void) {

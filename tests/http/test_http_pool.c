@@ -14,7 +14,7 @@
 
 #include "fixture.h"
 
-/* EVIDENCE: README "Limits" (Architecture): per-client queues served round
+/* EVIDENCE: docs/howto/limits.md (Architecture): per-client queues served round
  * robin, a full queue answered 503 at once, another client's cheap work not
  * kept waiting by a client's long work, and a client that hangs up stops its
  * work */
@@ -178,7 +178,7 @@ static void run_forwarded(int trusted, const char *xff1, const char *xff2,
   unlink(d.log_path);
 }
 
-/* EVIDENCE: README "Limits": --trusted-proxy */
+/* EVIDENCE: docs/howto/limits.md: --trusted-proxy */
 static void test_forwarded(void) {
   const char *first = "10.0.0.1, 127.0.0.1";
   run_forwarded(1, first, "10.0.0.2", 0);    /* another client: it runs */

@@ -13,7 +13,7 @@
 
 #include "fixture.h"
 
-/* EVIDENCE: README "Limits" (Signals): SIGTERM refuses new connections,
+/* EVIDENCE: docs/howto/limits.md (Signals): SIGTERM refuses new connections,
  * finishes the work in flight, answers what waits with 503 and exits 0;
  * SIGHUP does not stop the daemon */
 static void test_shutdown(void) {

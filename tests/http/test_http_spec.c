@@ -54,7 +54,7 @@ static json_t *ndjson_sorted(const char *t) {
   return a;
 }
 
-/* EVIDENCE: README "HTTP API": the contract is api/openapi.json, served at
+/* EVIDENCE: docs/api/index.md: the contract is api/openapi.json, served at
  * GET /openapi.json.  That its examples are what the daemon answers is not
  * stated in README; this test replays them. */
 /* Replay example @a name of @a path (its request @a body) asking for
