@@ -126,6 +126,18 @@ void srv__cors_of(const struct srv_daemon *d, struct MHD_Connection *c,
   }
 }
 
+/* The Content-Security-Policy of a page.  The explorer: its own files
+ * only, and calls to any daemon it is pointed at (?api=).  The user's
+ * guide: mkdocs' theme runs inline scripts and styles of its own (the guide
+ * is built from the source tree, never from a request), and nothing else. */
+#define EXPLORER_POLICY                                                        \
+  "default-src 'self'; connect-src 'self' http: https:; img-src 'self' "       \
+  "data:; base-uri 'none'; form-action 'none'; frame-ancestors 'none'"
+#define GUIDE_POLICY                                                           \
+  "default-src 'self'; script-src 'self' 'unsafe-inline'; style-src 'self' "   \
+  "'unsafe-inline'; img-src 'self' data:; base-uri 'none'; form-action "       \
+  "'self'; frame-ancestors 'none'"
+
 enum MHD_Result srv__send_body(struct MHD_Connection *c, srv__req *r,
                                int status, char *body, size_t len,
                                const char *ctype, int retry_after,
@@ -158,23 +170,9 @@ enum MHD_Result srv__send_body(struct MHD_Connection *c, srv__req *r,
   if (gz)
     MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_ENCODING, "gzip");
   srv__common_headers(r, resp);
-  if (ctype && !strncmp(ctype, "text/html", 9) && r->doc)
-    /* the user's guide: mkdocs' theme runs inline scripts and styles of
-     * its own (the guide is built from the source tree, never from a
-     * request), and nothing else */
+  if (ctype && !strncmp(ctype, "text/html", 9))
     MHD_add_response_header(resp, "Content-Security-Policy",
-                            "default-src 'self'; script-src 'self' "
-                            "'unsafe-inline'; style-src 'self' "
-                            "'unsafe-inline'; img-src 'self' data:; "
-                            "base-uri 'none'; form-action 'self'; "
-                            "frame-ancestors 'none'");
-  else if (ctype && !strncmp(ctype, "text/html", 9))
-    /* the explorer: its own files only, and calls to any daemon it is
-     * pointed at (?api=) */
-    MHD_add_response_header(resp, "Content-Security-Policy",
-                            "default-src 'self'; connect-src 'self' http: "
-                            "https:; img-src 'self' data:; base-uri 'none'; "
-                            "form-action 'none'; frame-ancestors 'none'");
+                            r->doc ? GUIDE_POLICY : EXPLORER_POLICY);
   if (r->etag) {
     /* the gzipped representation has its own validator */
     char tag[40];
