@@ -10,7 +10,8 @@
  * buffer) on its list of ready connections, so its loop turns without
  * waiting, at a full core, until that connection closes; and from outside
  * the library such a connection cannot be told from an idle one once its
- * socket holds no more bytes.  The internal loop answers it 500 instead
+ * socket holds no more bytes.  The internal loop answers it 500 instead,
+ * and wire.c refuses such a line with 413 before it fills the buffer
  * (docs/howto/limits.md).  Its callbacks are request.c's (a request) and
  * monitor.c's (a connection); computations run in the pool (pool.c); a
  * monitor thread (monitor.c) watches the connections; jobs have their own

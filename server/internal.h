@@ -13,6 +13,8 @@
  *   monitor.c  connections: tracking, admission by address, slow clients,
  *              peers gone away
  *   tally.c    counts by client: bytes held, connections
+ *   wire.c     the bytes libmicrohttpd reads, followed: a chunk line too
+ *              long for it answered 413
  */
 #ifndef SS_SERVER_INTERNAL_H
 #define SS_SERVER_INTERNAL_H
@@ -43,6 +45,15 @@
  * this is answered 413: what is left is kept for the answer's headers. */
 #define SRV__HEADER_ROOM (SRV__CONN_MEMORY - 4096)
 
+/* A chunk's size line (its size and extensions) longer than this is
+ * answered 413 (wire.c): with the largest header block the daemon takes,
+ * libmicrohttpd 0.9.75 holds a line of 4090 bytes, and answers 500 to a
+ * longer one. */
+#define SRV__CHUNK_LINE 2048
+/* The bytes of a header line that wire.c keeps: a Content-Length's value
+ * with blanks around it. */
+#define SRV__WIRE_KEEP 64
+
 /* Once fewer than --reserved-connections slots are free, a new connection
  * is taken only from an address that holds fewer than this many (a
  * browser opens up to 6 to a host). */
@@ -62,6 +73,23 @@ long srv__tally_get(srv__tally *t, const char *key, unsigned *keys,
 typedef struct srv__jobs srv__jobs;
 typedef struct srv__results srv__results;
 
+/* What wire.c knows of the requests in a connection's bytes. */
+typedef struct srv__wire {
+  int state;
+  int fresh;                       /* no request line yet */
+  int lengths, encodings, chunked; /* the block's headers of framing */
+  int odd;                         /* a header the framer does not read */
+  int in_size, digits;             /* a size line's hex digits */
+  int cr;                          /* the line so far ends in CR */
+  int refuse;                      /* at the library's next read */
+  unsigned long long left;         /* bytes of the body or chunk */
+  unsigned long long size;         /* the chunk's, from its size line */
+  size_t line, kept;               /* bytes of the line, and kept of it */
+  char keep[SRV__WIRE_KEEP];
+} srv__wire;
+
+struct srv__req;
+
 /* One TCP connection, from NOTIFY_CONNECTION's start to its close. */
 typedef struct srv__conn {
   struct srv__conn *prev, *next;
@@ -71,6 +99,9 @@ typedef struct srv__conn {
   int shut;            /* the monitor closed it */
   int peer_port;       /* of a TCP peer, else 0 */
   int space_in_target; /* the current request's target, as sent */
+  /* the request being received or answered (on the I/O thread) */
+  struct srv__req *req;
+  srv__wire wire;
   /* for diagnosis (srv_connection_watched) */
   atomic_int requests, suspended, resumed;
   char key[SRV_CLIENT_KEY];
@@ -372,5 +403,13 @@ int srv__peer_closed(int fd);
  * next request on @a cn), 0 stops it (the request is wholly received);
  * @a cn may be NULL. */
 void srv__receiving(struct srv_daemon *d, srv__conn *cn, int receiving);
+
+/* ---- wire.c -------------------------------------------------------------- */
+
+/* Follow the bytes libmicrohttpd reads from @a cn (its fd set): 0, or -1
+ * when its descriptor is beyond the table. */
+int srv__wire_open(srv__conn *cn);
+/* Stop following them: before the descriptor is closed. */
+void srv__wire_close(srv__conn *cn);
 
 #endif

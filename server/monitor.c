@@ -114,6 +114,7 @@ void srv__connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
     cn->receiving = 1;
     client_key(c, cn->key, sizeof cn->key);
     cn->peer_port = peer_port(c);
+    srv__wire_open(cn);
     srv__tally_add(d->conns, cn->key, 1);
     pthread_mutex_lock(&d->mu);
     cn->next = d->conn_list;
@@ -126,6 +127,7 @@ void srv__connection(void *cls, struct MHD_Connection *c, void **socket_ctx,
   }
   if (!cn)
     return;
+  srv__wire_close(cn); /* libmicrohttpd closes the socket after */
   srv__tally_add(d->conns, cn->key, -1);
   pthread_mutex_lock(&d->mu);
   if (cn->prev)

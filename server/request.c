@@ -294,8 +294,10 @@ static enum MHD_Result admit(struct srv_daemon *d, struct MHD_Connection *c,
   r->d = d;
   r->c = c;
   r->cn = ci ? ci->socket_context : NULL;
-  if (r->cn)
+  if (r->cn) {
     atomic_fetch_add(&r->cn->requests, 1);
+    r->cn->req = r;
+  }
   r->t0 = srv__now();
   r->ep = api_endpoint_count();
   snprintf(r->method, sizeof r->method, "%s", method);
@@ -721,9 +723,9 @@ static void access_log(const struct srv_daemon *d, const srv__req *r,
  * cut, a batch's included); both are 499, as nginx logs them. */
 /* The status of an answer libmicrohttpd made itself, for a request the
  * daemon had not answered yet: its error pages for what it refuses while a
- * body comes (a malformed chunk, a chunk size over 2^64, and, in 0.9.75, a
- * chunk line that does not fit the connection's memory, answered 500;
- * docs/howto/limits.md).  @a otherwise when it made none: the client went
+ * body comes (a malformed chunk, a chunk size over 2^64; a chunk line too
+ * long for the connection's memory, which 0.9.75 answers 500, wire.c
+ * refuses first).  @a otherwise when it made none: the client went
  * away. */
 static int library_status(struct MHD_Connection *c, int otherwise) {
   const union MHD_ConnectionInfo *ci =
@@ -753,6 +755,8 @@ void srv__completed(void *cls, struct MHD_Connection *c, void **con_cls,
     access_log(d, r, status, dt);
   /* the next request on this connection has its own deadline */
   srv__receiving(d, r->cn, 1);
+  if (r->cn && r->cn->req == r)
+    r->cn->req = NULL;
   srv__held(d, r->key, -r->held);
   api_response_free(&r->ar);
   api_batch_free(r->ab);
