@@ -411,5 +411,8 @@ void srv__receiving(struct srv_daemon *d, srv__conn *cn, int receiving);
 int srv__wire_open(srv__conn *cn);
 /* Stop following them: before the descriptor is closed. */
 void srv__wire_close(srv__conn *cn);
+/* Whether socket @a fd's end for reading is the daemon's own, not the
+ * client's: a refusal waits for libmicrohttpd's next read (any thread). */
+int srv__wire_pending(int fd);
 
 #endif

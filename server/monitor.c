@@ -158,7 +158,7 @@ void srv__receiving(struct srv_daemon *d, srv__conn *cn, int receiving) {
  * request) or nothing to read say it is still there. */
 int srv__peer_closed(int fd) {
   char b;
-  if (fd < 0)
+  if (fd < 0 || srv__wire_pending(fd))
     return 0;
   ssize_t k = recv(fd, &b, 1, MSG_PEEK | MSG_DONTWAIT);
   return k == 0 ||

@@ -19,14 +19,17 @@
  * chunk by chunk to its trailer's empty line.  A chunk line longer than
  * SRV__CHUNK_LINE bytes is refused: the bytes before it are given to the
  * library (so that it has the request's headers, and the daemon its
- * request), the socket is shut for reading, and the library's next read of
- * it writes the 413 to the socket, as the daemon answers a body over its
+ * request), the socket is shut for reading (which the monitor is told is
+ * not the client's doing: srv__wire_pending), and the library's next read
+ * of it writes the 413 to the socket, as the daemon answers a body over its
  * limit (srv__send_raw_problem), and tells the library that the client has
  * gone, so that it closes the connection.  Where the framer and the
  * library could read a request differently (two lengths, a length and a
- * Transfer-Encoding, a folded header, a malformed chunk) the daemon
- * refuses the request itself or the library does (request.c), and the
- * framer stops following that connection: it never refuses what it does
+ * Transfer-Encoding, a folded header, a malformed chunk, a line that
+ * starts with NUL, which the library takes for an empty one) the daemon
+ * refuses the request itself or the library does (request.c), or the
+ * framer cannot tell where a block ends, and it stops following that
+ * connection: it never refuses what it does
  * not read the library's way.
  *
  * All of it runs on libmicrohttpd's one I/O thread, where the connections
@@ -59,6 +62,9 @@ enum {
  * when the table is made (what the daemon may raise its soft limit to),
  * at most 2^20. */
 static _Atomic(srv__conn *) *table;
+/* by descriptor too: 1 while a refusal waits for the library's next read
+ * (read by other threads, which may not follow a connection's pointer) */
+static atomic_uchar *pending;
 static atomic_size_t table_n; /* set once the table is */
 static pthread_once_t table_once = PTHREAD_ONCE_INIT;
 
@@ -69,7 +75,9 @@ static void table_make(void) {
       rl.rlim_max < n)
     n = (size_t)rl.rlim_max;
   /* untouched pages of zeros: what is used is what the descriptors reach */
-  if ((table = calloc(n, sizeof *table)))
+  table = calloc(n, sizeof *table);
+  pending = calloc(n, sizeof *pending);
+  if (table && pending)
     atomic_store(&table_n, n);
 }
 
@@ -85,8 +93,15 @@ int srv__wire_open(srv__conn *cn) {
 
 void srv__wire_close(srv__conn *cn) {
   if (cn->fd >= 0 && (size_t)cn->fd < atomic_load(&table_n) &&
-      atomic_load(&table[cn->fd]) == cn)
+      atomic_load(&table[cn->fd]) == cn) {
+    atomic_store(&pending[cn->fd], 0);
     atomic_store(&table[cn->fd], NULL);
+  }
+}
+
+int srv__wire_pending(int fd) {
+  return fd >= 0 && (size_t)fd < atomic_load(&table_n) &&
+         atomic_load(&pending[fd]);
 }
 
 /* ---- the framer ---------------------------------------------------------- */
@@ -248,12 +263,18 @@ static long follow(srv__wire *w, const char *p, size_t n) {
       if (!lf)
         break;
       i++; /* the LF */
+      if (w->kept && !w->keep[0]) {
+        /* the library takes a line that starts with NUL for an empty
+         * one: where a block ends is not read its way here */
+        w->state = W_OFF;
+        break;
+      }
       if (w->state == W_HEAD)
         head_line(w);
       else if (w->line - (w->line > 0 && w->cr) == 0)
         w->state = W_HEAD, w->fresh = 1; /* the trailer's end */
-      if (w->state == W_HEAD || w->state == W_TRAILER)
-        w->line = w->kept = 0, w->cr = 0;
+      w->line = w->kept = 0;
+      w->cr = 0;
       break;
     }
     }
@@ -270,6 +291,7 @@ static ssize_t refuse(srv__conn *cn) {
   srv__req *r = cn->req;
   cn->wire.state = W_OFF;
   cn->wire.refuse = 0;
+  atomic_store(&pending[cn->fd], 0);
   if (r && !r->done) {
     char detail[128];
     snprintf(detail, sizeof detail,
@@ -297,8 +319,11 @@ ssize_t recv(int fd, void *buf, size_t len, int flags) {
   if (at > 0) {
     /* the bytes before the line first, so that the library has the
      * request's headers and the daemon its request: the library's next
-     * read, woken by the socket's end, refuses */
+     * read, woken by the socket's end, refuses (a short read alone does
+     * not bring it back).  Until then the socket's end is not the
+     * client's: srv__wire_pending tells the monitor so. */
     cn->wire.refuse = 1;
+    atomic_store(&pending[fd], 1);
     shutdown(fd, SHUT_RD);
     return at;
   }

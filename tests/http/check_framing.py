@@ -203,7 +203,10 @@ def check_chunk_extension(binary):
         lo, hi = 0, 32768
         while hi - lo > 1:
             mid = (lo + hi) // 2
-            raw, _, _ = exchange(d.port, chunked(10, "pad", mid))
+            raw, _, _ = exchange(d.port, chunked(10, "pad", mid), seconds=10)
+            if status_of(raw) not in (413, 422):
+                print("  X-Pad of %d: %r" % (mid, raw[:300]))
+                return False
             if status_of(raw) == 413:
                 hi = mid
             else:
@@ -260,6 +263,44 @@ def check_chunk_extension(binary):
                 print("  four requests on a connection, %s: %s, closed %s, "
                       "%.2f s" % (how, got, closed, dt))
                 ok = False
+        return ok
+    finally:
+        d.stop()
+
+
+def check_chunk_line_neighbours(binary):
+    """What the daemon's reading of the bytes beside libmicrohttpd must not
+    do: refuse a request the library reads otherwise (a line starting with
+    NUL, which the library takes for an empty one, ends a trailer; the next
+    request's Content-Length body then looks like a header block and an
+    over-long chunk line), or cancel an earlier request still computing
+    when a later one on the connection is refused."""
+    d = Daemon(binary, "--no-jobs", *LONG_FLAGS)
+    try:
+        ok = True
+        stab = POST.replace("/simulate", "/stability").encode()
+        get = b"GET /health HTTP/1.1\r\nHost: x\r\n\r\n"
+        body = b"x\r\nTransfer-Encoding: chunked\r\n\r\n" + b"A" * 2100
+        data = (stab + b"Transfer-Encoding: chunked\r\n\r\n2\r\n{}\r\n0\r\n"
+                b"\x00\r\n" + stab + b"Content-Length: %d\r\n\r\n" %
+                len(body) + body + get)
+        raw, _, _ = exchange(d.port, data, seconds=2)
+        got = re.findall(rb"HTTP/1\.1 (\d{3}) ", raw)
+        if got != [b"422", b"400", b"200"]:
+            print("  a trailer ended by a NUL line: %s" % got)
+            ok = False
+        # about 0.2 s of computing, then a request refused behind it
+        sim = ('{%s,"initial":%s,"t_end":5e6,"events":false}' %
+               (PAPER, X0)).encode()
+        data = (POST.encode() + b"Content-Length: %d\r\n\r\n" % len(sim) +
+                sim + stab + b"Transfer-Encoding: chunked\r\n\r\n2;x=" +
+                b"a" * 2100 + b"\r\n{}\r\n0\r\n\r\n")
+        raw, closed, dt = exchange(d.port, data, seconds=10)
+        got = re.findall(rb"HTTP/1\.1 (\d{3}) ", raw)
+        if got != [b"200", b"413"] or not closed:
+            print("  a computation, then a chunk line over the limit: %s, "
+                  "closed %s, %.2f s" % (got, closed, dt))
+            ok = False
         return ok
     finally:
         d.stop()
