@@ -81,7 +81,6 @@ typedef struct srv__wire {
   int odd;                         /* a header the framer does not read */
   int in_size, digits;             /* a size line's hex digits */
   int cr;                          /* the line so far ends in CR */
-  int refuse;                      /* at the library's next read */
   unsigned long long left;         /* bytes of the body or chunk */
   unsigned long long size;         /* the chunk's, from its size line */
   size_t line, kept;               /* bytes of the line, and kept of it */

@@ -43,6 +43,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
 
@@ -106,18 +107,13 @@ int srv__wire_pending(int fd) {
 
 /* ---- the framer ---------------------------------------------------------- */
 
-static int lower(int ch) { return ch >= 'A' && ch <= 'Z' ? ch + 32 : ch; }
-
 /* Whether the line @a s (@a n bytes kept) starts with header @a name and
  * its colon, in any case; then *value is where its value starts. */
 static int header_is(const char *s, size_t n, const char *name,
                      const char **value) {
   size_t k = strlen(name);
-  if (n <= k || s[k] != ':')
+  if (n <= k || s[k] != ':' || strncasecmp(s, name, k))
     return 0;
-  for (size_t i = 0; i < k; i++)
-    if (lower((unsigned char)s[i]) != name[i])
-      return 0;
   *value = s + k + 1;
   return 1;
 }
@@ -189,7 +185,7 @@ static void head_line(srv__wire *w) {
 static int hex(int ch) {
   if (ch >= '0' && ch <= '9')
     return ch - '0';
-  ch = lower(ch);
+  ch |= 0x20; /* lower case */
   return ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
 }
 
@@ -290,7 +286,6 @@ static long follow(srv__wire *w, const char *p, size_t n) {
 static ssize_t refuse(srv__conn *cn) {
   srv__req *r = cn->req;
   cn->wire.state = W_OFF;
-  cn->wire.refuse = 0;
   atomic_store(&pending[cn->fd], 0);
   if (r && !r->done) {
     char detail[128];
@@ -308,7 +303,7 @@ ssize_t recv(int fd, void *buf, size_t len, int flags) {
   srv__conn *cn = NULL;
   if (!flags && fd >= 0 && (size_t)fd < atomic_load(&table_n))
     cn = atomic_load(&table[fd]);
-  if (cn && cn->wire.refuse)
+  if (cn && atomic_load(&pending[fd]))
     return refuse(cn);
   ssize_t n = recvfrom(fd, buf, len, flags, NULL, NULL);
   if (!cn || n <= 0 || cn->wire.state == W_OFF)
@@ -322,7 +317,6 @@ ssize_t recv(int fd, void *buf, size_t len, int flags) {
      * read, woken by the socket's end, refuses (a short read alone does
      * not bring it back).  Until then the socket's end is not the
      * client's: srv__wire_pending tells the monitor so. */
-    cn->wire.refuse = 1;
     atomic_store(&pending[fd], 1);
     shutdown(fd, SHUT_RD);
     return at;
