@@ -5,6 +5,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -368,6 +369,51 @@ static int gfdf(const gsl_vector *x, void *vp, gsl_vector *f, gsl_matrix *J) {
   return GSL_SUCCESS;
 }
 
+/* The hybridsj solvers of a thread, by number of unknowns, kept from one
+ * solve to the next: allocating one is some 55 blocks from malloc, a tenth
+ * of a solve from a guess, and gsl_multiroot_fdfsolver_set initialises
+ * all of its state.  Freed when the thread ends. */
+static _Thread_local gsl_multiroot_fdfsolver *solver_kept[MAXP + 1];
+static pthread_key_t solver_key;
+static pthread_once_t solver_once = PTHREAD_ONCE_INIT;
+static int solver_key_ok;
+
+static void solvers_free(void *kept) {
+  gsl_multiroot_fdfsolver **k = kept;
+  for (int n = 0; n <= MAXP; n++)
+    if (k[n]) {
+      gsl_multiroot_fdfsolver_free(k[n]);
+      k[n] = NULL;
+    }
+}
+
+static void solver_key_make(void) {
+  solver_key_ok = pthread_key_create(&solver_key, solvers_free) == 0;
+}
+
+static gsl_multiroot_fdfsolver *solver_take(int n) {
+  gsl_multiroot_fdfsolver *s = solver_kept[n];
+  if (s) {
+    solver_kept[n] = NULL;
+    return s;
+  }
+  return gsl_multiroot_fdfsolver_alloc(gsl_multiroot_fdfsolver_hybridsj,
+                                       (size_t)n);
+}
+
+/* @a s back to the thread's solvers, where the thread's end frees it (or
+ * freed now, when that cannot be arranged). */
+static void solver_give(int n, gsl_multiroot_fdfsolver *s) {
+  pthread_once(&solver_once, solver_key_make);
+  if (solver_kept[n] || !solver_key_ok ||
+      (!pthread_getspecific(solver_key) &&
+       pthread_setspecific(solver_key, solver_kept) != 0)) {
+    gsl_multiroot_fdfsolver_free(s);
+    return;
+  }
+  solver_kept[n] = s;
+}
+
 /* Solve the duration equations from tau (in place).  Returns SS_OK with
  * z0, the residual and the iteration count, or a failure. */
 static int solve_durations(const oeq *q, double *tau, double z0[4],
@@ -379,15 +425,14 @@ static int solve_durations(const oeq *q, double *tau, double z0[4],
   gsl_ctx ctx = {q, 0};
   gsl_multiroot_function_fdf fdf = {gf, gdf, gfdf, (size_t)n, &ctx};
   gsl_vector_view xv = gsl_vector_view_array(tau, (size_t)n);
-  gsl_multiroot_fdfsolver *s = gsl_multiroot_fdfsolver_alloc(
-      gsl_multiroot_fdfsolver_hybridsj, (size_t)n);
+  gsl_multiroot_fdfsolver *s = solver_take(n);
   int rc = SS_ENOCONV, it = 0, status;
   double F[MAXP], J[MAXP * MAXP], x[MAXP];
   if (!s)
     return SS_ENOMEM;
   if (gsl_multiroot_fdfsolver_set(s, &fdf, &xv.vector) != GSL_SUCCESS ||
       ctx.bad) {
-    gsl_multiroot_fdfsolver_free(s);
+    solver_give(n, s);
     return SS_ESINGULAR;
   }
   do {
@@ -398,7 +443,7 @@ static int solve_durations(const oeq *q, double *tau, double z0[4],
     status = gsl_multiroot_test_residual(s->f, 1e3 * tolF);
   } while (status == GSL_CONTINUE && it < MAX_SOLVER_ITERS);
   memcpy(x, s->x->data, (size_t)n * sizeof *x);
-  gsl_multiroot_fdfsolver_free(s);
+  solver_give(n, s);
   /* Polish: plain Newton steps while the residual falls. */
   if (oeq_eval(q, x, z0, F, J))
     return SS_ESINGULAR;

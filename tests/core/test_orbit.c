@@ -3,6 +3,7 @@
  * simulation (the certified event-driven one and the rk8pd reference) and
  * by finite differences of the simulated Poincare map.
  */
+#include <pthread.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -523,6 +524,52 @@ static void test_long_attractor(void) {
          cl);
 }
 
+/* A thread keeps its root finder from one solve to the next (orbit.c):
+ * a solve after others, the last of them a failure, gives every bit of the
+ * answer a first solve on a fresh thread gives.  The thread's end frees the
+ * solvers it kept (the sanitizer build's leak check sees it otherwise). */
+typedef struct kept_run {
+  ss_orbit first, again;
+  int rc_first, rc_other, rc_again;
+} kept_run;
+
+static void *kept_thread(void *arg) {
+  kept_run *k = arg;
+  ss_params p = {0.2, 4.0, 0.0724, 0.6178, 1.0};
+  ss_model m;
+  ss_model_init(&m, &p, NULL);
+  ss_mode modes[3] = {SS_MODE_SLIP, SS_MODE_OVERSHOOT, SS_MODE_STICK};
+  double tau[3] = {4.5, 2.717, 3.0536}, far[3] = {0.01, 40, 0.01};
+  ss_orbit o;
+  k->rc_first = ss_orbit_solve(&m, 3, modes, tau, NULL, &k->first, NULL);
+  ss_mode two[2] = {SS_MODE_SLIP, SS_MODE_STICK};
+  double tau2[2] = {3, 2};
+  (void)ss_orbit_solve(&m, 2, two, tau2, NULL, &o, NULL);
+  k->rc_other = ss_orbit_solve(&m, 3, modes, far, NULL, &o, NULL);
+  k->rc_again = ss_orbit_solve(&m, 3, modes, tau, NULL, &k->again, NULL);
+  return NULL;
+}
+
+static void test_kept_solver(void) {
+  kept_run k[2];
+  for (int t = 0; t < 2; t++) {
+    pthread_t th;
+    ASSERT_EQ_INT(pthread_create(&th, NULL, kept_thread, &k[t]), 0);
+    pthread_join(th, NULL);
+  }
+  ASSERT_EQ_INT(k[0].rc_first, SS_OK);
+  ASSERT_TRUE(k[0].rc_other != SS_OK);
+  ASSERT_EQ_INT(k[0].rc_again, SS_OK);
+  const ss_orbit *o[3] = {&k[0].again, &k[1].first, &k[1].again};
+  for (int i = 0; i < 3; i++) {
+    ASSERT_TRUE(memcmp(o[i]->durations, k[0].first.durations,
+                       sizeof o[i]->durations) == 0);
+    ASSERT_TRUE(memcmp(o[i]->z0, k[0].first.z0, sizeof o[i]->z0) == 0);
+    ASSERT_EQ_INT(o[i]->iterations, k[0].first.iterations);
+    ASSERT_TRUE(o[i]->residual == k[0].first.residual);
+  }
+}
+
 int main(void) {
   gsl_set_error_handler_off();
   test_long_attractor();
@@ -534,5 +581,6 @@ int main(void) {
   test_equation_jacobian();
   test_bad_input();
   test_no_repetitions();
+  test_kept_solver();
   TEST_DONE();
 }
