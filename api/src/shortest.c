@@ -219,8 +219,10 @@ static inline void put8(char *p, uint32_t x) {
   memcpy(p + 6, PAIRS + 2 * (b % 100), 2);
 }
 
-/* The decimal digits of @a d (> 0, below 10^17) into @a buf; their
- * count. */
+/* The decimal digits of @a d (> 0, below 10^17) at the start of @a buf,
+ * which has room for 17 (and may get bytes after the digits); their
+ * count.  Every copy is of a fixed size: a copy of a variable size is a
+ * call, and a number has several. */
 static int digits_of(uint64_t d, char *buf) {
   static const uint64_t P10[] = {1,
                                  10,
@@ -240,7 +242,7 @@ static int digits_of(uint64_t d, char *buf) {
                                  1000000000000000,
                                  10000000000000000};
   /* 17 digits with leading zeros, then the n that d has */
-  char t[17];
+  char t[40];
   uint64_t hi = d / 100000000;
   t[0] = (char)('0' + hi / 100000000);
   put8(t + 1, (uint32_t)(hi % 100000000));
@@ -248,21 +250,24 @@ static int digits_of(uint64_t d, char *buf) {
   /* bits times log10(2): the count of digits or one less */
   int n = (64 - __builtin_clzll(d)) * 1233 >> 12;
   n += n < 17 && d >= P10[n];
-  memcpy(buf, t + 17 - n, (size_t)n);
+  memcpy(buf, t + 17 - n, 17);
   return n;
 }
 
 int api__shortest(double v, char *out) {
-  char *o = out;
+  /* written in a buffer with room past the end for whole copies of the
+   * digits (17 bytes at most, 24 with sign, point and exponent) */
+  char buf[64], *o = buf;
   uint64_t bits;
   memcpy(&bits, &v, sizeof bits);
   if (bits >> 63)
     *o++ = '-';
   if (v == 0) {
     memcpy(o, "0.0", 4);
-    return (int)(o - out) + 3;
+    memcpy(out, buf, 8);
+    return (int)(o - buf) + 3;
   }
-  char d[24];
+  char d[40];
   int k;
   int len = digits_of(to_decimal(v, &k), d);
   int n = len + k; /* v = 0.d1d2... * 10^n */
@@ -271,7 +276,7 @@ int api__shortest(double v, char *out) {
     *o++ = d[0];
     if (len > 1) {
       *o++ = '.';
-      memcpy(o, d + 1, (size_t)len - 1);
+      memcpy(o, d + 1, 16);
       o += len - 1;
     }
     int x = n - 1;
@@ -283,27 +288,26 @@ int api__shortest(double v, char *out) {
       *o++ = (char)('0' + x / 100);
     *o++ = (char)('0' + x / 10 % 10);
     *o++ = (char)('0' + x % 10);
-  } else if (n <= 0) { /* 0.000ddd */
-    memcpy(o, "0.", 2);
-    o += 2;
-    memset(o, '0', (size_t)-n);
-    o += -n;
-    memcpy(o, d, (size_t)len);
+  } else if (n <= 0) { /* 0.000ddd: n is -3 at least */
+    memcpy(o, "0.000", 5);
+    o += 2 - n;
+    memcpy(o, d, 17);
     o += len;
-  } else if (n >= len) { /* ddd000.0 */
-    memcpy(o, d, (size_t)len);
+  } else if (n >= len) { /* ddd000.0: n is 17 at most */
+    memcpy(o, d, 17);
     o += len;
-    memset(o, '0', (size_t)(n - len));
+    memcpy(o, "0000000000000000", 16);
     o += n - len;
     memcpy(o, ".0", 2);
     o += 2;
   } else { /* dd.ddd */
-    memcpy(o, d, (size_t)n);
+    memcpy(o, d, 17);
     o += n;
     *o++ = '.';
-    memcpy(o, d + n, (size_t)(len - n));
+    memcpy(o, d + n, 17);
     o += len - n;
   }
   *o = 0;
-  return (int)(o - out);
+  memcpy(out, buf, 32);
+  return (int)(o - buf);
 }

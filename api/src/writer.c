@@ -64,12 +64,17 @@ void api__w_str(api_wbuf *b, const char *s, size_t n) {
 
 /* The fewest digits that read back as the same double (shortest.c). */
 void api__w_real(api_wbuf *b, double v) {
-  char s[32];
   if (!isfinite(v)) {
     api__w_put(b, "null", 4);
     return;
   }
-  api__w_put(b, s, (size_t)api__shortest(v, s));
+  /* straight into the buffer, which has the 32 bytes it writes */
+  if (b->oom || b->len + 32 + 1 > b->cap) {
+    api__w_room(b, 32);
+    if (b->oom)
+      return;
+  }
+  b->len += (size_t)api__shortest(v, b->p + b->len);
 }
 
 /* ---- lazy arrays ----------------------------------------------------------
